@@ -1,0 +1,183 @@
+"""Tasks: the simulated systems a policy is scored on, and the closed-loop rollout that scores it.
+
+An `Environment` is reset with an episode seed and stepped with an action; it returns
+`(reward, observation)`. `MujocoEnvironment` steps a compiled MuJoCo model directly,
+reproducing dm_control's `control.Environment` exactly (same reset, same sub-stepping,
+same observations) without its per-step Python bookkeeping. `evaluate_policy` runs a
+policy for a list of episode seeds and returns the per-episode returns, or the reason
+it failed; it never raises for anything the policy does.
+"""
+
+from __future__ import annotations
+
+import abc
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import mujoco
+import numpy as np
+
+Policy = Callable[[np.ndarray], object]
+
+_INSTABILITY_WARNINGS = (
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_BADQACC,
+)
+
+
+class PolicyFailure(Exception):
+    """The policy, or the simulation it drove, failed; the message is the stored reason."""
+
+
+class Environment(abc.ABC):
+    """A deterministic episodic control task: same seed and actions, same rewards."""
+
+    observation_size: int
+    action_size: int
+    horizon: int = 1000
+
+    @abc.abstractmethod
+    def reset(self, seed: int) -> np.ndarray:
+        """Start the episode that `seed` names; return the first observation."""
+
+    @abc.abstractmethod
+    def step(self, action: np.ndarray) -> tuple[float, np.ndarray]:
+        """Apply `action` (already of shape `(action_size,)`) for one control period."""
+
+    def check_episode(self) -> None:
+        """Raise `PolicyFailure` if the episode just simulated is not trustworthy."""
+
+
+class MujocoEnvironment(Environment):
+    """dm_control's physics stepping on a bare `mujoco.MjModel`.
+
+    dm_control resets with `mj_resetData` and an unactuated `mj_forward` both before and after
+    the task places the initial state, and steps as `mj_step2; mj_step(n - 1); mj_step1`, so
+    that position-dependent fields (and thus observations) are current after each step.
+    A plain `mj_step` loop drifts from it; this class does exactly the same calls.
+    """
+
+    def __init__(self, model: mujoco.MjModel, n_sub_steps: int, horizon: int = 1000):
+        self.model = model
+        self.data = mujoco.MjData(model)
+        self.n_sub_steps = n_sub_steps
+        self.horizon = horizon
+        self.action_size = model.nu
+        limited = model.actuator_ctrllimited.astype(bool)
+        self.ctrl_low = np.where(limited, model.actuator_ctrlrange[:, 0], -np.inf)
+        self.ctrl_high = np.where(limited, model.actuator_ctrlrange[:, 1], np.inf)
+        self.control_timestep = n_sub_steps * model.opt.timestep
+
+    @abc.abstractmethod
+    def initialize_episode(self, random: np.random.RandomState) -> None:
+        """Place the initial state, drawing from `random` exactly as the dm_control task does."""
+
+    @abc.abstractmethod
+    def observation(self) -> np.ndarray:
+        """The flat observation, a new array (the policy may keep or modify it)."""
+
+    @abc.abstractmethod
+    def reward(self) -> float:
+        """The reward for the state just reached."""
+
+    def forward_unactuated(self) -> None:
+        flags = self.model.opt.disableflags
+        self.model.opt.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
+        try:
+            mujoco.mj_forward(self.model, self.data)
+        finally:
+            self.model.opt.disableflags = flags
+
+    def reset(self, seed: int) -> np.ndarray:
+        mujoco.mj_resetData(self.model, self.data)
+        self.forward_unactuated()
+        self.initialize_episode(np.random.RandomState(seed))
+        self.forward_unactuated()
+        return self.observation()
+
+    def step(self, action: np.ndarray) -> tuple[float, np.ndarray]:
+        np.clip(action, self.ctrl_low, self.ctrl_high, out=self.data.ctrl)
+        mujoco.mj_step2(self.model, self.data)
+        if self.n_sub_steps > 1:
+            mujoco.mj_step(self.model, self.data, self.n_sub_steps - 1)
+        mujoco.mj_step1(self.model, self.data)
+        return self.reward(), self.observation()
+
+    def check_episode(self) -> None:
+        # MuJoCo resets a diverged state by itself and only counts a warning, so an unstable
+        # episode would otherwise go on scoring garbage; one check per episode is enough.
+        for warning in _INSTABILITY_WARNINGS:
+            if self.data.warning[warning].number:
+                raise PolicyFailure(f"unstable simulation: {warning.name} at time {self.data.warning[warning].lastinfo}")
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """The outcome of running one policy on a list of episode seeds."""
+
+    returns: tuple[float, ...] = ()
+    failure: str | None = None
+
+    @property
+    def score(self) -> float:
+        """Mean return; -inf for a failed evaluation, so it loses every comparison."""
+        return -math.inf if self.failure else float(np.mean(self.returns))
+
+
+def episode_seeds(seed: int, episodes: int) -> list[int]:
+    """Fixed episode seeds derived from the run seed (common random numbers for every candidate)."""
+    return [int(s) for s in np.random.SeedSequence(seed).generate_state(episodes)]
+
+
+def as_action(raw: object, action_size: int) -> np.ndarray:
+    """The policy's output as a finite `(action_size,)` array, or `PolicyFailure` saying what is wrong."""
+    try:
+        action = np.asarray(raw, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise PolicyFailure(f"bad action: {type(raw).__name__} is not numeric ({error})") from None
+    if action.shape != (action_size,):
+        if action.size == action_size and action.ndim <= 1:
+            action = action.reshape(action_size)
+        else:
+            raise PolicyFailure(f"bad action shape: {action.shape}, expected ({action_size},)")
+    if not np.isfinite(action).all():
+        raise PolicyFailure("non-finite action")
+    return action
+
+
+def rollout(env: Environment, policy: Policy, seed: int) -> float:
+    """Return of one episode; raises `PolicyFailure` with the reason if anything goes wrong."""
+    # Policies may draw from np.random (the paper's quadruped policy adds noise): seeding it per
+    # episode keeps the objective a deterministic function of the parameters.
+    np.random.seed(seed % 2**32)
+    obs = env.reset(seed)
+    total = 0.0
+    size = env.action_size
+    for step in range(env.horizon):
+        try:
+            raw = policy(obs)
+        except Exception as error:  # the policy is untrusted code: any error is its failure
+            raise PolicyFailure(f"exception: {type(error).__name__}: {error} (step {step})") from None
+        try:
+            action = as_action(raw, size)
+        except PolicyFailure as failure:
+            raise PolicyFailure(f"{failure} (step {step})") from None
+        reward, obs = env.step(action)
+        total += reward
+    env.check_episode()
+    return total
+
+
+def evaluate_policy(env: Environment, policy: Policy, seeds: list[int]) -> Evaluation:
+    """Mean-return evaluation over `seeds`; a failure in any episode fails the whole evaluation."""
+    returns = []
+    for seed in seeds:
+        try:
+            returns.append(rollout(env, policy, seed))
+        except PolicyFailure as failure:
+            return Evaluation(tuple(returns), str(failure))
+        except RecursionError:
+            return Evaluation(tuple(returns), "exception: RecursionError: maximum recursion depth exceeded")
+    return Evaluation(tuple(returns))
