@@ -1,0 +1,179 @@
+"""Getting the policy program out of raw language-model output.
+
+Rules, in the order they apply:
+  * Code comes from the markdown fences (```python, ```py, plain ```; an unclosed last fence runs
+    to the end of the answer). If no fence holds the function, the whole answer is searched, so
+    bare code with prose around it works too.
+  * Within a chunk, code starts at a line that opens a definition, an import or an assignment;
+    the region keeps the indentation of that line (a uniform indent, as inside a class, is
+    removed) and is cut to its longest parseable prefix. That drops prose after the code and the
+    broken tail of a truncated answer; a definition left with an empty body by the cut was cut
+    off and is dropped with it.
+  * Candidates are top-level functions named `policy` or `policy_vN`. The newest is the one
+    defined last in the answer (models write improved versions after older ones; the plain name
+    wins only if it comes last); if its body is only a docstring, `pass` or `...`, the answer is
+    rejected ("empty policy body"). Methods inside a class are not lifted out.
+  * The result keeps the chosen function, renamed to `policy` (references to its old name
+    too), plus the module-level imports, helper functions, classes and constant assignments it
+    needs, followed transitively by name. Unused ones are dropped, so a stray import cannot fail
+    the sandbox's import check. When a name is defined twice, the last definition wins. Other
+    versions are dropped unless the chosen one calls them; top-level statements that run code
+    (prints, tests, `if __name__ == ...`) are always dropped.
+  * `import numpy as np` / `import math` are added when the code uses `np` / `math` unbound.
+The result is formatted by ast.unparse, which drops comments; the caller keeps the raw text.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+
+_FENCE = re.compile(r"\s*```")
+# Lines that can open a stretch of code (definition, import, assignment); prose rarely does.
+_CODE_START = re.compile(r"\s*(?:(?:async\s+)?def\s|class\s|import\s|from\s+[\w.]+\s+import\s|@\w|[A-Za-z_]\w*\s*(?::[^=]+)?=(?!=))")
+_MISSING_IMPORTS = {"np": "import numpy as np", "numpy": "import numpy", "math": "import math"}
+
+
+class ExtractionError(ValueError):
+    """No usable policy in the answer; the message is a one-line reason."""
+
+
+def extract_policy(text: str, function_name: str = "policy") -> str:
+    """The policy module (imports, helpers, `def policy`) in a language model's answer."""
+    version = re.compile(rf"{re.escape(function_name)}(?:_v\d+)?")
+    statements = [s for block in _fenced_blocks(text) for module in _code_regions(block) for s in module.body]
+    if not _versions(statements, version):
+        statements = [s for module in _code_regions(text) for s in module.body]
+    versions = _versions(statements, version)
+    if not versions:
+        if re.search(rf"^\s*def\s+{version.pattern}\s*\(", text, re.MULTILINE):
+            raise ExtractionError(f"found 'def {function_name}' but no complete top-level definition of it")
+        raise ExtractionError(f"no function named '{function_name}'")
+    chosen = versions[-1]
+    if _is_empty(chosen):
+        raise ExtractionError("empty policy body")
+    module = ast.Module(body=_needed(chosen, statements), type_ignores=[])
+    _rename(module, chosen.name, function_name)
+    _add_missing_imports(module)
+    return ast.unparse(module)
+
+
+def _fenced_blocks(text: str) -> list[str]:
+    blocks, current = [], None
+    for line in text.splitlines():
+        if _FENCE.match(line):
+            if current is None:
+                current = []
+            else:
+                blocks.append("\n".join(current))
+                current = None
+        elif current is not None:
+            current.append(line)
+    if current is not None:  # the answer stopped inside a fence
+        blocks.append("\n".join(current))
+    return blocks
+
+
+def _code_regions(chunk: str) -> list[ast.Module]:
+    """Every parseable stretch of code in `chunk`, skipping the prose between them."""
+    lines = chunk.splitlines()
+    modules, start = [], 0
+    while start < len(lines):
+        found = _parse_prefix(lines, start) if _CODE_START.match(lines[start]) else None
+        if found is None:
+            start += 1
+        else:
+            module, start = found
+            modules.append(module)
+    return modules
+
+
+def _parse_prefix(lines: list[str], start: int) -> tuple[ast.Module, int] | None:
+    """The longest parseable run of lines from `start` at its indentation, and where it ends."""
+    indent = lines[start][: len(lines[start]) - len(lines[start].lstrip())]
+    end = start
+    while end < len(lines) and (not lines[end].strip() or lines[end].startswith(indent)):
+        end += 1
+    region = [line[len(indent) :] for line in lines[start:end]]
+    size = len(region)
+    while size > 0:
+        try:
+            module = ast.parse("\n".join(region[:size]))
+        except SyntaxError as error:
+            # No prefix that still holds the offending line can parse: skip past it at once.
+            size = min(size - 1, (error.lineno or size) - 1)
+            continue
+        cut = size < len(region)
+        if cut and module.body and isinstance(module.body[-1], ast.FunctionDef) and _is_empty(module.body[-1]):
+            module.body.pop()  # truncated right after its signature or docstring
+        return module, start + size
+    return None
+
+
+def _versions(statements: list[ast.stmt], version: re.Pattern) -> list[ast.FunctionDef]:
+    return [s for s in statements if isinstance(s, ast.FunctionDef) and version.fullmatch(s.name)]
+
+
+def _is_empty(function: ast.FunctionDef) -> bool:
+    return all(isinstance(s, ast.Pass) or (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant)) for s in function.body)
+
+
+def _bound_names(statement: ast.stmt) -> list[str]:
+    if isinstance(statement, (ast.Import, ast.ImportFrom)):
+        return [alias.asname or alias.name.split(".")[0] for alias in statement.names]
+    if isinstance(statement, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+        return [statement.name]
+    if isinstance(statement, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+        targets = statement.targets if isinstance(statement, ast.Assign) else [statement.target]
+        return [n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)]
+    return []  # statements that only run code
+
+
+def _free_names(statement: ast.stmt) -> set[str]:
+    names = [n for n in ast.walk(statement) if isinstance(n, ast.Name)]
+    loaded = {n.id for n in names if isinstance(n.ctx, ast.Load)}
+    if not isinstance(statement, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+        return loaded
+    local = {n.id for n in names if not isinstance(n.ctx, ast.Load)} | {a.arg for a in ast.walk(statement) if isinstance(a, ast.arg)}
+    declared_global = {name for n in ast.walk(statement) if isinstance(n, ast.Global) for name in n.names}
+    return loaded - (local - declared_global)
+
+
+def _needed(chosen: ast.FunctionDef, statements: list[ast.stmt]) -> list[ast.stmt]:
+    """`chosen` and the module-level statements it depends on: imports first, then answer order."""
+    definitions: dict[str, list[ast.stmt]] = {}
+    for statement in statements:
+        for name in _bound_names(statement):
+            if isinstance(statement, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                definitions[name] = [statement]  # a redefinition replaces the earlier one
+            else:
+                definitions.setdefault(name, []).append(statement)
+    kept, pending, visited = {id(chosen)}, list(_free_names(chosen)), set()
+    while pending:
+        name = pending.pop()
+        if name in visited:
+            continue
+        visited.add(name)
+        for statement in definitions.get(name, []):
+            if statement is not chosen and id(statement) not in kept:
+                kept.add(id(statement))
+                pending.extend(_free_names(statement))
+    ordered = [s for s in statements if id(s) in kept]
+    imports = {ast.dump(s): s for s in ordered if isinstance(s, (ast.Import, ast.ImportFrom))}
+    return list(imports.values()) + [s for s in ordered if not isinstance(s, (ast.Import, ast.ImportFrom))]
+
+
+def _rename(module: ast.Module, old: str, new: str) -> None:
+    for node in ast.walk(module):
+        if isinstance(node, ast.FunctionDef) and node.name == old:
+            node.name = new
+        elif isinstance(node, ast.Name) and node.id == old:
+            node.id = new
+
+
+def _add_missing_imports(module: ast.Module) -> None:
+    bound = {name for statement in module.body for name in _bound_names(statement)}
+    bound |= {name for n in ast.walk(module) if isinstance(n, (ast.Import, ast.ImportFrom)) for name in _bound_names(n)}
+    used = {n.id for n in ast.walk(module) if isinstance(n, ast.Name)}
+    missing = [ast.parse(line).body[0] for name, line in _MISSING_IMPORTS.items() if name in used - bound]
+    module.body[:0] = missing

@@ -1,0 +1,411 @@
+"""Turning a policy program into a parametric skeleton, its structure key, and back into readable code.
+
+A policy program is a Python module (imports, constants, helpers) that defines `policy(obs)`.
+`parametrize` replaces every tunable numeric literal with `params[i]` (i in source order) so a
+gradient-free optimizer can tune the constants (paper Sec. IV-C), and `instantiate` writes values
+back. The skeleton reads `params` as a free global: `exec(skeleton, {"params": values, ...})`.
+The structure key is the sha256 of the skeleton's AST dump, so programs that differ only in
+tunable constants, comments, docstrings or formatting share a key; a changed index, name or
+operator gives a new one.
+
+Which literals are tunable
+--------------------------
+Every int or float literal is a parameter, sign included (`-3.2` and `+3` are one parameter
+each), except where the program needs an exact integer: a tuned 6.03 there would crash the
+program or change its structure. Integer literals are structural when they appear
+  * anywhere in a subscript: `obs[47]`, `obs[0:12]`, `x[0::3]`, `obs[-1]`, `a[0, 1]`, `obs[n - 1]`;
+  * anywhere in the arguments of calls that take shapes, counts, indices or digits, by the last
+    name of the callee (`_INTEGER_CALLS`: `np.zeros`, `np.full`, `np.eye`, `.reshape`, `range`,
+    `np.tile`, `np.repeat`, `np.roll`, `round`, `pow`, `enumerate`, `np.linspace`,
+    `np.random.normal`, ...);
+  * as direct arguments of attribute calls that take an axis (`np.sum(x, 0)`, `x.max(1)`); the
+    builtins `max(x, 0)`, `min`, `sum` take values, so their literals stay tunable;
+  * in keyword arguments that name a shape, size, axis, count or precision (`_INTEGER_KEYWORDS`);
+  * as exponents (`x ** 2`), divisors of `%` and `//` (`i % 2`), operands of bitwise operators,
+    repetition counts (`[0.0] * 12`), operands of `==`, `!=`, `in`, `not in`, and dict keys;
+  * as values bound to a variable that is itself used in such a position (`n = 12; obs[:n]`),
+    followed to a fixpoint. Names are tracked across the whole module, not per scope, which errs
+    on the structural side.
+Float literals stay tunable in all those places (a float is never a shape, index or count):
+`np.full(12, 0.5)` tunes 0.5, `x ** 0.5` tunes 0.5, `np.random.normal(scale=0.04, size=12)` tunes
+0.04. Never tunable: booleans, strings, None, complex numbers, and anything in decorators, type
+annotations, f-strings, match patterns and imports.
+
+Values are floats, and `instantiate` always writes float literals (`2` comes back as `2.0`),
+which is exactly what running the skeleton with `params` computes.
+
+The placeholder is always the global `params`. A program that uses the name `params` itself
+keeps it under a fresh name (`params_`, or more underscores until unused) in the skeleton.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+PARAMS_NAME = "params"
+
+# Callees whose integer arguments are shapes, counts, indices or digits (matched by last name).
+_INTEGER_CALLS = frozenset({
+    "zeros", "ones", "empty", "full", "eye", "identity", "reshape", "resize", "range", "arange",
+    "linspace", "logspace", "geomspace", "slice", "tile", "repeat", "roll", "round", "around",
+    "pow", "power", "enumerate", "normal", "uniform", "randint", "rand", "randn", "random",
+    "standard_normal", "choice", "seed", "default_rng", "diag", "split", "array_split", "take",
+})
+# Attribute calls whose bare integer arguments are axes: np.sum(x, 0), x.max(1).
+_AXIS_CALLS = frozenset({
+    "sum", "mean", "max", "min", "amax", "amin", "argmax", "argmin", "prod", "std", "var",
+    "median", "cumsum", "cumprod", "any", "all", "concatenate", "stack", "expand_dims",
+    "squeeze", "flip", "sort", "argsort", "diff", "norm", "transpose", "swapaxes", "moveaxis",
+})
+_INTEGER_KEYWORDS = frozenset({
+    "size", "shape", "newshape", "axis", "axes", "num", "ndmin", "ndigits", "decimals",
+    "start", "repeats", "reps", "shift", "k", "n", "ord", "seed", "minlength",
+})
+_BITWISE_OPS = (ast.LShift, ast.RShift, ast.BitAnd, ast.BitOr, ast.BitXor)
+_DISCRETE_COMPARISONS = (ast.Eq, ast.NotEq, ast.In, ast.NotIn)
+
+
+class ProgramError(ValueError):
+    """The program cannot be parametrized or instantiated; the message is one line."""
+
+
+@dataclass(frozen=True)
+class ParametricProgram:
+    skeleton: str  # the module with each tunable literal replaced by params[i]
+    values: tuple[float, ...]  # the replaced literals, in source order
+    key: str  # sha256 of the skeleton's AST: equal for programs that differ only in constants
+
+    @property
+    def n_params(self) -> int:
+        return len(self.values)
+
+
+def parametrize(code: str, function_name: str = "policy") -> ParametricProgram:
+    """Split `code` into a skeleton over `params` and the values of its tunable literals."""
+    tree = _parse(code)
+    if not any(isinstance(s, (ast.FunctionDef, ast.AsyncFunctionDef)) and s.name == function_name for s in tree.body):
+        raise ProgramError(f"no function named '{function_name}'")
+    _strip_docstrings(tree)
+    identifiers = _identifiers(tree)
+    if PARAMS_NAME in identifiers:
+        fresh = PARAMS_NAME + "_"
+        while fresh in identifiers:
+            fresh += "_"
+        _rename(tree, PARAMS_NAME, fresh)
+    literals = _tunable_literals(tree)
+    slots = {id(node): _slot(i) for i, node in enumerate(literals)}
+    skeleton = ast.unparse(_Replace(slots).visit(tree))
+    return ParametricProgram(skeleton, tuple(float(_value(node)) for node in literals), structure_key(skeleton))
+
+
+def instantiate(skeleton: str, values: Sequence[float], digits: int | None = None) -> str:
+    """The skeleton with `params[i]` replaced by `values[i]` as a float literal.
+
+    digits=None writes each value's repr, so running the result is bit-identical to running the
+    skeleton with `params = values`; digits=4 rounds to 4 significant digits for display
+    (9.437, -12.24, 0.0004321, 1234.0)."""
+    tree = _parse(skeleton)
+    slots = [node for node in ast.walk(tree) if _is_slot(node)]
+    needed = 1 + max((slot.slice.value for slot in slots), default=-1)
+    if needed != len(values):
+        raise ProgramError(f"skeleton takes {needed} parameters, got {len(values)} values")
+    literals = {id(slot): _literal(values[slot.slice.value], digits) for slot in slots}
+    return ast.unparse(_Replace(literals).visit(tree))
+
+
+def count_lines(code: str) -> int:
+    """Non-blank lines of the module once docstrings and comments are gone, as ast.unparse lays it out
+    (so the count does not depend on the author's line wrapping)."""
+    tree = _parse(code)
+    _strip_docstrings(tree)
+    return sum(1 for line in ast.unparse(tree).splitlines() if line.strip())
+
+
+def structure_key(skeleton: str) -> str:
+    """sha256 hex of the skeleton's AST dump (positions excluded, so formatting does not count)."""
+    tree = _parse(skeleton)
+    _strip_docstrings(tree)
+    return hashlib.sha256(ast.dump(tree).encode()).hexdigest()
+
+
+def _parse(code: str) -> ast.Module:
+    try:
+        return ast.parse(code)
+    except SyntaxError as error:
+        raise ProgramError(f"syntax error at line {error.lineno}: {error.msg}") from None
+    except ValueError as error:  # e.g. null bytes in the source
+        raise ProgramError(f"unparseable source: {error}") from None
+
+
+def _strip_docstrings(tree: ast.Module) -> None:
+    """Drop docstrings and other bare string statements; they are comments to the interpreter."""
+    for node in ast.walk(tree):
+        for field in ("body", "orelse", "finalbody"):
+            statements = getattr(node, field, None)
+            if not isinstance(statements, list):
+                continue
+            kept = [s for s in statements if not (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant) and isinstance(s.value.value, str))]
+            if not kept and field == "body" and not isinstance(node, ast.Module):
+                kept = [ast.Pass()]
+            setattr(node, field, kept)
+
+
+def _identifiers(tree: ast.AST) -> set[str]:
+    names = set()
+    for node in ast.walk(tree):
+        for field in ("id", "arg", "name", "asname"):
+            value = getattr(node, field, None)
+            if isinstance(value, str):
+                names.add(value)
+        if isinstance(node, (ast.Global, ast.Nonlocal)):
+            names.update(node.names)
+    return names
+
+
+def _rename(tree: ast.AST, old: str, new: str) -> None:
+    """Rename the identifier `old` everywhere it is bound or used (attributes are not identifiers)."""
+    local_functions = {n.name for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))}
+    for node in ast.walk(tree):  # breadth-first: a call is seen before its callee's name changes
+        if isinstance(node, ast.Name) and node.id == old:
+            node.id = new
+        elif isinstance(node, ast.arg) and node.arg == old:
+            node.arg = new
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.ExceptHandler)) and node.name == old:
+            node.name = new
+        elif isinstance(node, ast.alias) and (node.asname or node.name) == old:
+            node.asname = new
+        elif isinstance(node, (ast.Global, ast.Nonlocal)):
+            node.names = [new if name == old else name for name in node.names]
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in local_functions:
+            for keyword in node.keywords:
+                if keyword.arg == old:
+                    keyword.arg = new
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _is_literal(node: ast.AST) -> bool:
+    """A number, possibly signed: `-3.2` is one literal, not an operator applied to one."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        node = node.operand
+    return isinstance(node, ast.Constant) and _is_number(node.value)
+
+
+def _value(node: ast.expr) -> int | float:
+    if isinstance(node, ast.UnaryOp):
+        return -node.operand.value if isinstance(node.op, ast.USub) else node.operand.value
+    return node.value
+
+
+def _is_int_literal(node: ast.AST) -> bool:
+    return _is_literal(node) and isinstance(_value(node), int)
+
+
+def _is_sequence(node: ast.AST) -> bool:
+    return isinstance(node, (ast.List, ast.Tuple, ast.ListComp)) or (isinstance(node, ast.Constant) and isinstance(node.value, str))
+
+
+def _stored_names(targets: Sequence[ast.expr]) -> set[str]:
+    return {n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
+
+
+class _Literals(ast.NodeVisitor):
+    """One pass over a module: the tunable literals, and the names met in integer positions."""
+
+    def __init__(self, integer_names: set[str]):
+        self.integer_names = integer_names  # names known (from earlier passes) to hold integers
+        self.seen_names: set[str] = set()
+        self.tunable: list[ast.expr] = []
+        self._integer_depth = 0
+
+    def _integral(self, node: ast.AST) -> None:
+        self._integer_depth += 1
+        self.visit(node)
+        self._integer_depth -= 1
+
+    def _bound_value(self, names: set[str], value: ast.AST) -> None:
+        if names & self.integer_names:
+            self._integral(value)
+        else:
+            self.visit(value)
+
+    def _literal(self, node: ast.expr) -> None:
+        if not (self._integer_depth and isinstance(_value(node), int)):
+            self.tunable.append(node)
+
+    def visit_Constant(self, node: ast.Constant) -> None:
+        if _is_number(node.value):
+            self._literal(node)
+
+    def visit_UnaryOp(self, node: ast.UnaryOp) -> None:
+        if _is_literal(node):
+            self._literal(node)
+        else:
+            self.generic_visit(node)
+
+    def visit_Name(self, node: ast.Name) -> None:
+        if self._integer_depth:
+            self.seen_names.add(node.id)
+
+    def visit_Subscript(self, node: ast.Subscript) -> None:
+        self.visit(node.value)
+        self._integral(node.slice)
+
+    def visit_Call(self, node: ast.Call) -> None:
+        self.visit(node.func)
+        callee = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", None)
+        takes_axis = isinstance(node.func, ast.Attribute) and callee in _AXIS_CALLS
+        for arg in node.args:
+            if callee in _INTEGER_CALLS:
+                self._integral(arg)
+            elif not (takes_axis and (_is_int_literal(arg) or isinstance(arg, ast.Tuple) and all(map(_is_int_literal, arg.elts)))):
+                self.visit(arg)
+        for keyword in node.keywords:
+            if callee in _INTEGER_CALLS or keyword.arg in _INTEGER_KEYWORDS:
+                self._integral(keyword.value)
+            else:
+                self.visit(keyword.value)
+
+    def visit_BinOp(self, node: ast.BinOp) -> None:
+        if isinstance(node.op, (ast.Pow, ast.Mod, ast.FloorDiv)):
+            self.visit(node.left)
+            self._integral(node.right)
+        elif isinstance(node.op, _BITWISE_OPS):
+            self._integral(node.left)
+            self._integral(node.right)
+        elif isinstance(node.op, ast.Mult) and _is_sequence(node.left):
+            self.visit(node.left)
+            self._integral(node.right)
+        elif isinstance(node.op, ast.Mult) and _is_sequence(node.right):
+            self._integral(node.left)
+            self.visit(node.right)
+        else:
+            self.generic_visit(node)
+
+    def visit_Compare(self, node: ast.Compare) -> None:
+        for i, operand in enumerate([node.left, *node.comparators]):
+            if any(isinstance(op, _DISCRETE_COMPARISONS) for op in node.ops[max(i - 1, 0) : i + 1]):
+                self._integral(operand)
+            else:
+                self.visit(operand)
+
+    def visit_Dict(self, node: ast.Dict) -> None:
+        for key, value in zip(node.keys, node.values):
+            if key is not None:  # None: a **mapping entry
+                self._integral(key)
+            self.visit(value)
+
+    def visit_Assign(self, node: ast.Assign) -> None:
+        for target in node.targets:
+            self.visit(target)
+        self._bound_value(_stored_names(node.targets), node.value)
+
+    def visit_AugAssign(self, node: ast.AugAssign) -> None:
+        self.visit(node.target)
+        self._bound_value(_stored_names([node.target]), node.value)
+
+    def visit_AnnAssign(self, node: ast.AnnAssign) -> None:
+        self.visit(node.target)
+        if node.value is not None:
+            self._bound_value(_stored_names([node.target]), node.value)
+
+    def visit_NamedExpr(self, node: ast.NamedExpr) -> None:
+        self._bound_value({node.target.id}, node.value)
+
+    def visit_For(self, node: ast.For | ast.AsyncFor) -> None:
+        self.visit(node.target)
+        self._bound_value(_stored_names([node.target]), node.iter)
+        for statement in node.body + node.orelse:
+            self.visit(statement)
+
+    visit_AsyncFor = visit_For
+
+    def visit_comprehension(self, node: ast.comprehension) -> None:
+        self.visit(node.target)
+        self._bound_value(_stored_names([node.target]), node.iter)
+        for condition in node.ifs:
+            self.visit(condition)
+
+    def visit_arguments(self, node: ast.arguments) -> None:
+        positional = node.posonlyargs + node.args
+        with_defaults = list(zip(positional[len(positional) - len(node.defaults) :], node.defaults))
+        with_defaults += [(arg, d) for arg, d in zip(node.kwonlyargs, node.kw_defaults) if d is not None]
+        for arg, default in with_defaults:
+            self._bound_value({arg.arg}, default)
+
+    def visit_FunctionDef(self, node: ast.FunctionDef | ast.AsyncFunctionDef) -> None:
+        # Decorators and annotations configure the program; they are not control constants.
+        self.visit(node.args)
+        for statement in node.body:
+            self.visit(statement)
+
+    visit_AsyncFunctionDef = visit_FunctionDef
+
+    def visit_ClassDef(self, node: ast.ClassDef) -> None:
+        for statement in node.body:
+            self.visit(statement)
+
+    def visit_match_case(self, node: ast.match_case) -> None:
+        # Patterns must stay literals to remain valid syntax.
+        if node.guard is not None:
+            self.visit(node.guard)
+        for statement in node.body:
+            self.visit(statement)
+
+    def visit_arg(self, node: ast.arg) -> None:
+        pass  # only an annotation inside
+
+    def visit_JoinedStr(self, node: ast.JoinedStr) -> None:
+        pass  # f-string contents only format text
+
+
+def _tunable_literals(tree: ast.Module) -> list[ast.expr]:
+    """Tunable literal nodes in source order; integer names are followed until nothing changes."""
+    integer_names: set[str] = set()
+    while True:
+        finder = _Literals(integer_names)
+        finder.visit(tree)
+        if finder.seen_names <= integer_names:
+            return sorted(finder.tunable, key=lambda node: (node.lineno, node.col_offset))
+        integer_names |= finder.seen_names
+
+
+def _slot(index: int) -> ast.Subscript:
+    return ast.Subscript(ast.Name(PARAMS_NAME, ast.Load()), ast.Constant(index), ast.Load())
+
+
+def _is_slot(node: ast.AST) -> bool:
+    return (
+        isinstance(node, ast.Subscript)
+        and isinstance(node.value, ast.Name)
+        and node.value.id == PARAMS_NAME
+        and isinstance(node.slice, ast.Constant)
+        and type(node.slice.value) is int
+    )
+
+
+def _literal(value: float, digits: int | None) -> ast.expr:
+    value = float(value)
+    if digits is not None:
+        value = float(f"{value:.{digits}g}")
+    # A negative value is written `-x` (unary minus) so ast.unparse parenthesizes it where needed: (-2.0) ** 2.
+    if math.copysign(1.0, value) < 0:
+        return ast.UnaryOp(ast.USub(), ast.Constant(-value))
+    return ast.Constant(value)
+
+
+class _Replace(ast.NodeTransformer):
+    """Swap nodes, identified by id(), for replacement nodes."""
+
+    def __init__(self, replacements: dict[int, ast.expr]):
+        self.replacements = replacements
+
+    def visit(self, node: ast.AST) -> ast.AST:
+        replacement = self.replacements.get(id(node))
+        return replacement if replacement is not None else self.generic_visit(node)

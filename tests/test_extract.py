@@ -1,0 +1,321 @@
+import textwrap
+
+import pytest
+
+from colmo.extract import ExtractionError, extract_policy
+from colmo.program import parametrize
+
+
+def answer(text: str) -> str:
+    return textwrap.dedent(text).lstrip("\n")
+
+
+# (id, model answer, the extracted module exactly as returned)
+GOOD = [
+    (
+        "bare_code",
+        answer("""
+            import numpy as np
+
+            def policy(obs):
+                # proportional control
+                return np.clip(-1.5 * obs[0], -1.0, 1.0)
+        """),
+        "import numpy as np\n\ndef policy(obs):\n    return np.clip(-1.5 * obs[0], -1.0, 1.0)",
+    ),
+    (
+        "chatty_python_fence",
+        answer("""
+            Sure! Looking at the previous attempts, the controller lacks damping. Here is an improved version:
+
+            ```python
+            import numpy as np
+
+            def policy_v2(obs):
+                \"\"\"Improved version of policy_v1.\"\"\"
+                angle = np.arctan2(obs[1], obs[0])
+                return np.clip(-8.0 * angle - 1.2 * obs[2], -1.0, 1.0)
+            ```
+
+            The new term `-1.2 * obs[2]` adds damping, which should reduce overshoot. Let me know if you want me to tune it further!
+        """),
+        'import numpy as np\n\ndef policy(obs):\n    """Improved version of policy_v1."""\n'
+        "    angle = np.arctan2(obs[1], obs[0])\n    return np.clip(-8.0 * angle - 1.2 * obs[2], -1.0, 1.0)",
+    ),
+    (
+        "py_fence_without_import",
+        answer("""
+            ```py
+            def policy(obs):
+                return np.tanh(2.0 * obs[0]) + math.pi * obs[1]
+            ```
+        """),
+        "import numpy as np\nimport math\n\ndef policy(obs):\n    return np.tanh(2.0 * obs[0]) + math.pi * obs[1]",
+    ),
+    (
+        "fence_without_language",
+        answer("""
+            Here you go:
+            ```
+            def policy(obs):
+                action = np.zeros(6)
+                action[0] = -12.2 * obs[3]
+                return action
+            ```
+        """),
+        "import numpy as np\n\ndef policy(obs):\n    action = np.zeros(6)\n    action[0] = -12.2 * obs[3]\n    return action",
+    ),
+    (
+        "several_versions_in_one_block",
+        answer("""
+            ```python
+            import numpy as np
+
+            def policy_v0(obs):
+                return np.random.uniform()
+
+            def policy_v1(obs):
+                return 0.0
+
+            def policy_v2(obs):
+                return 0.7 * obs[0]
+            ```
+        """),
+        "def policy(obs):\n    return 0.7 * obs[0]",
+    ),
+    (
+        "newest_block_wins_and_usage_example_is_dropped",
+        answer("""
+            First attempt:
+            ```python
+            def policy_v2(obs):
+                return 0.5 * obs[0]
+            ```
+            A better one uses the velocity too:
+            ```python
+            def policy_v3(obs):
+                return 0.5 * obs[0] - 0.1 * obs[1]
+            ```
+            You can call it like this:
+            ```python
+            obs = env.reset()
+            print(policy_v3(obs))
+            ```
+        """),
+        "def policy(obs):\n    return 0.5 * obs[0] - 0.1 * obs[1]",
+    ),
+    (
+        "last_definition_is_newest_not_highest_number",
+        answer("""
+            def policy_v3(obs):
+                return 3.0 * obs[0]
+
+            def policy_v2(obs):
+                return 2.0 * obs[0]
+        """),
+        "def policy(obs):\n    return 2.0 * obs[0]",
+    ),
+    (
+        "plain_name_after_versions",
+        answer("""
+            def policy_v1(obs):
+                return obs[0]
+
+            def policy(obs):
+                return -obs[0]
+        """),
+        "def policy(obs):\n    return -obs[0]",
+    ),
+    (
+        "self_reference_is_renamed",
+        answer("""
+            def policy_v2(obs, depth=0):
+                if depth > 1:
+                    return 0.0
+                return obs[0] + 0.5 * policy_v2(obs, depth + 1)
+        """),
+        "def policy(obs, depth=0):\n    if depth > 1:\n        return 0.0\n    return obs[0] + 0.5 * policy(obs, depth + 1)",
+    ),
+    (
+        "older_version_kept_when_called",
+        answer("""
+            def policy_v1(obs):
+                return -2.0 * obs[0]
+
+            def policy_v2(obs):
+                return 1.1 * policy_v1(obs)
+        """),
+        "def policy_v1(obs):\n    return -2.0 * obs[0]\n\ndef policy(obs):\n    return 1.1 * policy_v1(obs)",
+    ),
+    (
+        "helpers_constants_and_test_code",
+        answer("""
+            Below, a helper clips the action and a constant holds the gains.
+
+            ```python
+            import numpy as np
+            import math
+
+            GAINS = np.array([1.5, -0.3])
+            UNUSED = 42
+
+            def saturate(x, limit=1.0):
+                return np.clip(x, -limit, limit)
+
+            def unused_helper(x):
+                return math.sqrt(x)
+
+            def policy(obs):
+                return saturate(GAINS @ obs[:2])
+
+            obs = np.zeros(8)
+            print(policy(obs))
+
+            if __name__ == "__main__":
+                for _ in range(3):
+                    print(policy(np.random.randn(8)))
+            ```
+        """),
+        "import numpy as np\nGAINS = np.array([1.5, -0.3])\n\ndef saturate(x, limit=1.0):\n    return np.clip(x, -limit, limit)\n\n"
+        "def policy(obs):\n    return saturate(GAINS @ obs[:2])",
+    ),
+    (
+        "helper_redefined_later_wins",
+        answer("""
+            ```python
+            def gain():
+                return 1.0
+            ```
+            Actually, a larger gain works better:
+            ```python
+            def gain():
+                return 3.0
+
+            def policy(obs):
+                return gain() * obs[0]
+            ```
+        """),
+        "def gain():\n    return 3.0\n\ndef policy(obs):\n    return gain() * obs[0]",
+    ),
+    (
+        "imports_in_separate_block",
+        answer("""
+            You will need these imports:
+            ```python
+            import numpy as np
+            from math import pi
+            ```
+            And the policy:
+            ```python
+            def policy(obs):
+                return np.sin(pi * obs[0])
+            ```
+        """),
+        "import numpy as np\nfrom math import pi\n\ndef policy(obs):\n    return np.sin(pi * obs[0])",
+    ),
+    (
+        "import_inside_function",
+        answer("""
+            def policy(obs):
+                import math
+                return math.tanh(3.0 * obs[0])
+        """),
+        "def policy(obs):\n    import math\n    return math.tanh(3.0 * obs[0])",
+    ),
+    (
+        "uniform_indent_as_in_a_class",
+        "```python\n    def policy(obs):\n        if obs[0] > 0.2:\n            return 1.0\n        return -1.0\n```",
+        "def policy(obs):\n    if obs[0] > 0.2:\n        return 1.0\n    return -1.0",
+    ),
+    (
+        "indented_code_in_prose",
+        "The policy is:\n\n    def policy(obs):\n        return 0.3 * obs[2]\n\nIt is a plain P controller.",
+        "def policy(obs):\n    return 0.3 * obs[2]",
+    ),
+    (
+        "truncated_mid_line",
+        answer("""
+            ```python
+            import numpy as np
+
+            def policy(obs):
+                ball = obs[:3]
+                cup = obs[3:]
+                action = np.zeros(2)
+                action[0] = 4.2 * (cup[0] - ball[0])
+                action[1] = 1.1 * (cup[2] - ball[2]) + 0.5 * (cup[1
+        """).rstrip("\n"),
+        "import numpy as np\n\ndef policy(obs):\n    ball = obs[:3]\n    cup = obs[3:]\n    action = np.zeros(2)\n    action[0] = 4.2 * (cup[0] - ball[0])",
+    ),
+    (
+        # A cut that still parses is kept: `0.` reads as 0.0, a constant the optimizer tunes anyway.
+        "truncated_inside_a_number",
+        "```python\ndef policy(obs):\n    action = 1.1 * obs[0]\n    return action + 0.",
+        "def policy(obs):\n    action = 1.1 * obs[0]\n    return action + 0.0",
+    ),
+    (
+        "truncated_mid_block",
+        answer("""
+            ```python
+            def policy(obs):
+                torque = -5.0 * obs[1]
+                if abs(obs[2]) > 3.0:
+                    torque = np.array([
+                        1.0,
+                        -1.
+        """).rstrip("\n"),
+        "def policy(obs):\n    torque = -5.0 * obs[1]",  # np is no longer used: no import
+    ),
+    (
+        "truncated_new_version_falls_back",
+        answer("""
+            ```python
+            def policy_v1(obs):
+                return 0.9 * obs[0]
+
+            def policy_v2(obs):
+                \"\"\"Improved version of policy_v1.\"\"\"
+                gain = 1.2 *
+        """).rstrip("\n"),
+        "def policy(obs):\n    return 0.9 * obs[0]",
+    ),
+]
+
+
+@pytest.mark.parametrize("text, expected", [case[1:] for case in GOOD], ids=[case[0] for case in GOOD])
+def test_extracts_policy(text, expected):
+    extracted = extract_policy(text)
+    assert extracted == expected
+    parametrize(extracted)  # what comes out is always a program the optimizer can use
+
+
+# (id, model answer, error message)
+BAD = [
+    ("refusal", "I'm sorry, but I can't write a control policy without knowing the system dynamics.", "no function named 'policy'"),
+    ("empty", "", "no function named 'policy'"),
+    ("garbage", "}}{{ ))) ## ``` @@ 0x;; def ( :\n\t\t=>", "no function named 'policy'"),
+    ("other_name_only", "```python\ndef controller(obs):\n    return 0.5 * obs[0]\n```", "no function named 'policy'"),
+    ("pass_body", "```python\ndef policy(obs):\n    pass\n```", "empty policy body"),
+    ("docstring_body", 'def policy_v2(obs):\n    """Improved version of policy_v1."""\n', "empty policy body"),
+    ("ellipsis_body", "Fill in the body:\n\ndef policy(obs):\n    ...\n", "empty policy body"),
+    ("unparseable_definition", "```python\ndef policy(obs) return obs[0] * 2\n```", "found 'def policy' but no complete top-level definition of it"),
+    ("truncated_in_signature", "```python\nimport numpy as np\n\ndef policy(obs,", "found 'def policy' but no complete top-level definition of it"),
+    ("truncated_in_docstring", '```python\ndef policy(obs):\n    """Improved version of', "found 'def policy' but no complete top-level definition of it"),
+    ("method_of_a_class", "class Controller:\n    def policy(self, obs):\n        return 1.0\n", "found 'def policy' but no complete top-level definition of it"),
+]
+
+
+@pytest.mark.parametrize("text, message", [case[1:] for case in BAD], ids=[case[0] for case in BAD])
+def test_rejects_answer(text, message):
+    with pytest.raises(ExtractionError) as error:
+        extract_policy(text)
+    assert str(error.value) == message
+
+
+def test_function_name():
+    text = "def controller_v4(obs):\n    return 2.0 * obs[0]\n\ndef policy(obs):\n    return 0.0"
+    assert extract_policy(text, function_name="controller") == "def controller(obs):\n    return 2.0 * obs[0]"
+
+
+def test_extraction_error_is_a_value_error():
+    assert issubclass(ExtractionError, ValueError)

@@ -1,0 +1,107 @@
+"""`python -m colmo.optimize`: tuning one policy file end to end, and its user errors."""
+
+import pytest
+
+from conftest import last_json_line, run_colmo
+
+RAW_ANSWER = '''Sure! Here is an improved controller. It switches between energy pumping and a PD law:
+
+```python
+import numpy as np
+
+def policy_v2(obs):
+    """Improved version of policy_v1."""
+    angle = np.arctan2(-obs[1], obs[0])
+    if np.abs(angle) > np.pi / 6.512:
+        return np.sign(obs[2])
+    return 9.437 * np.sin(angle) - 2.746 * obs[2]
+```
+
+This should swing the pendulum up faster.
+'''
+
+
+def optimize(tmp_path, *overrides):
+    return run_colmo("colmo.optimize", *overrides, "executor.workers=2", cwd=tmp_path)
+
+
+def test_mistuned_policy_gains_100_points_with_oneplusone(tmp_path, examples):
+    result = optimize(tmp_path, f"policy_file={examples / 'pendulum_mistuned.py'}", "gfo=oneplusone")
+    assert result.returncode == 0, result.stderr
+    summary = last_json_line(result.stdout)
+    assert summary["evaluations"] == 101  # budget 100, plus the readable 4-digit code
+    assert summary["n_params"] == 3
+    assert summary["score"] >= summary["score_initial"] + 100, summary
+    assert "score with its own constants" in result.stdout
+    assert (next(tmp_path.glob("outputs/optimize/*/*/result.json"))).is_file()
+    tuned = next(tmp_path.glob("outputs/optimize/*/*/tuned_policy.py")).read_text()
+    assert tuned == summary["code"] and "def policy(obs)" in tuned
+
+
+@pytest.mark.parametrize("method", ["bo", "cma"])
+def test_bo_and_cma_also_improve_it(tmp_path, examples, method):
+    result = optimize(tmp_path, f"policy_file={examples / 'pendulum_mistuned.py'}", f"gfo={method}", "gfo.budget=60", "gfo.workers=2")
+    assert result.returncode == 0, result.stderr
+    summary = last_json_line(result.stdout)
+    assert summary["score"] > summary["score_initial"] + 50, summary
+
+
+def test_raw_model_answer_is_extracted(tmp_path):
+    answer = tmp_path / "answer.md"
+    answer.write_text(RAW_ANSWER)
+    result = optimize(tmp_path, f"policy_file={answer}", "gfo=none", "task.episodes=3")
+    assert result.returncode == 0, result.stderr
+    summary = last_json_line(result.stdout)
+    assert summary["n_params"] == 3 and summary["evaluations"] == 1
+    assert summary["score"] == summary["score_initial"] > 0
+    assert summary["code"].startswith("import numpy as np\n\ndef policy(obs):")
+
+
+def test_a_failing_policy_is_reported_not_crashed(tmp_path):
+    broken = tmp_path / "broken.py"
+    broken.write_text("def policy(obs):\n    return obs[0] / 0.0\n")
+    result = optimize(tmp_path, f"policy_file={broken}", "gfo=none", "task.episodes=2")
+    assert result.returncode == 1
+    summary = last_json_line(result.stdout)
+    assert summary["score"] is None and summary["failure"].startswith("non-finite action") or "exception" in summary["failure"]
+    assert "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize(
+    "overrides, message",
+    [
+        (["gfo=foo"], "Could not find 'gfo/foo'"),
+        (["gfo.budget=-5"], "gfo.budget must be >= 1, got -5"),
+        (["gfo.budget=abc"], "gfo.budget"),
+        (["gfo.nonsense=1"], "nonsense"),
+        (["task=nope"], "Could not find 'task/nope'"),
+        (["task.episodes=0"], "task.episodes must be >= 1"),
+        ([], "missing value for policy_file"),
+        (["policy_file=/no/such/file.py"], "policy_file not found: /no/such/file.py"),
+        (["task.spec=/no/such/spec.py"], "spec file not found"),
+    ],
+)
+def test_user_errors_end_in_one_line_and_exit_2(tmp_path, examples, overrides, message):
+    if not any(o.startswith("policy_file") for o in overrides) and overrides:
+        overrides = [*overrides, f"policy_file={examples / 'paper_pendulum.py'}"]
+    result = optimize(tmp_path, *overrides)
+    assert result.returncode == 2, (result.stdout, result.stderr)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("colmo: error: "), result.stderr
+    assert message in lines[0]
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        ("Sorry, I cannot help with that.", "no usable policy in"),
+        ("def policy(obs):\n    return (obs[0] +\n", "no usable policy in"),
+        ("import os\ndef policy(obs):\n    return os.getpid()\n", "forbidden: import os"),
+    ],
+)
+def test_unusable_policy_files_exit_2(tmp_path, content, message):
+    path = tmp_path / "policy.py"
+    path.write_text(content)
+    result = optimize(tmp_path, f"policy_file={path}")
+    assert result.returncode == 2, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and message in result.stderr
