@@ -188,12 +188,26 @@ class SearchLoopConfig:
 
 
 @dataclass
+class TrackerConfig:
+    """Where runs are logged: `mlflow` (default) or `none`."""
+
+    name: str = "mlflow"
+    tracking_uri: Optional[str] = None
+    experiment: Optional[str] = None
+    run_name: Optional[str] = None
+
+    def __post_init__(self) -> None:
+        _require(self.name in ("mlflow", "none"), f"tracker.name must be mlflow or none, got {self.name!r}")
+
+
+@dataclass
 class SearchConfig:
     task: TaskConfig = MISSING
     gfo: GFOConfig = MISSING
     llm: Any = MISSING
     database: DatabaseConfig = MISSING
     executor: ExecutorConfig = MISSING
+    tracker: TrackerConfig = MISSING
     search: SearchLoopConfig = field(default_factory=SearchLoopConfig)
     seed: int = 0
     resume: Optional[str] = None
@@ -214,6 +228,7 @@ def register_schemas() -> None:
     store.store(group="gfo", name="schema", node=GFOConfig)
     store.store(group="executor", name="schema", node=ExecutorConfig)
     store.store(group="database", name="schema", node=DatabaseConfig)
+    store.store(group="tracker", name="schema", node=TrackerConfig)
     store.store(group="llm", name="mutate_schema", node=MutateConfig)
     store.store(group="llm", name="openai_schema", node=OpenAIConfig)
     store.store(group="llm", name="vllm_schema", node=VLLMConfig)

@@ -11,6 +11,7 @@ it failed; it never raises for anything the policy does.
 from __future__ import annotations
 
 import abc
+import copy
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -25,6 +26,9 @@ _INSTABILITY_WARNINGS = (
     mujoco.mjtWarning.mjWARN_BADQVEL,
     mujoco.mjtWarning.mjWARN_BADQACC,
 )
+
+
+_MAX_CACHED_RESETS = 1024
 
 
 class PolicyFailure(Exception):
@@ -65,10 +69,9 @@ class MujocoEnvironment(Environment):
         self.n_sub_steps = n_sub_steps
         self.horizon = horizon
         self.action_size = model.nu
-        limited = model.actuator_ctrllimited.astype(bool)
-        self.ctrl_low = np.where(limited, model.actuator_ctrlrange[:, 0], -np.inf)
-        self.ctrl_high = np.where(limited, model.actuator_ctrlrange[:, 1], np.inf)
         self.control_timestep = n_sub_steps * model.opt.timestep
+        # Every candidate replays the same episode seeds: keep each seed's initial state.
+        self._initial_states: dict[int, mujoco.MjData] = {}
 
     @abc.abstractmethod
     def initialize_episode(self, random: np.random.RandomState) -> None:
@@ -91,14 +94,21 @@ class MujocoEnvironment(Environment):
             self.model.opt.disableflags = flags
 
     def reset(self, seed: int) -> np.ndarray:
-        mujoco.mj_resetData(self.model, self.data)
-        self.forward_unactuated()
-        self.initialize_episode(np.random.RandomState(seed))
-        self.forward_unactuated()
+        initial = self._initial_states.get(seed)
+        if initial is None:
+            mujoco.mj_resetData(self.model, self.data)
+            self.forward_unactuated()
+            self.initialize_episode(np.random.RandomState(seed))
+            self.forward_unactuated()
+            if len(self._initial_states) < _MAX_CACHED_RESETS:
+                self._initial_states[seed] = copy.copy(self.data)
+        else:
+            mujoco.mj_copyData(self.data, self.model, initial)
         return self.observation()
 
     def step(self, action: np.ndarray) -> tuple[float, np.ndarray]:
-        np.clip(action, self.ctrl_low, self.ctrl_high, out=self.data.ctrl)
+        # As in dm_control, MuJoCo clamps controls of limited actuators to their range.
+        self.data.ctrl[:] = action
         mujoco.mj_step2(self.model, self.data)
         if self.n_sub_steps > 1:
             mujoco.mj_step(self.model, self.data, self.n_sub_steps - 1)
