@@ -67,15 +67,21 @@ class GFOConfig:
         _require(self.search_range > 0, f"gfo.search_range must be > 0, got {self.search_range}")
 
 
+EXECUTORS = ("local", "ray")
+
+
 @dataclass
 class ExecutorConfig:
     name: str = "local"
     workers: int = 0
     timeout_s: float = 600.0
     memory_mb: int = 4096
+    address: Optional[str] = None
+    max_retries: int = 2
 
     def __post_init__(self) -> None:
-        _require(self.name == "local", f"executor.name must be local, got {self.name!r}")
+        _require(self.name in EXECUTORS, f"executor.name must be one of {', '.join(EXECUTORS)}; got {self.name!r}")
+        _require(self.max_retries >= 0, f"executor.max_retries must be >= 0, got {self.max_retries}")
         _require(self.workers >= 0, f"executor.workers must be >= 0 (0 = all cores), got {self.workers}")
         _require(self.timeout_s > 0, f"executor.timeout_s must be > 0, got {self.timeout_s}")
         _require(self.memory_mb >= 256, f"executor.memory_mb must be >= 256, got {self.memory_mb}")

@@ -108,9 +108,18 @@ class EvalRequest:
 
 
 class Executor(Protocol):
-    """Anything that evaluates a batch of requests, in order (a `WorkerPool`, a Ray cluster)."""
+    """Anything that evaluates batches of requests, results in request order (a `WorkerPool`,
+    a Ray cluster). Thread-safe: several programs' optimizers share one executor."""
+
+    n_workers: int
+    closed: bool
 
     def evaluate(self, requests: Sequence[EvalRequest]) -> list[Evaluation]: ...
+
+    @property
+    def busy_seconds(self) -> float: ...
+
+    def close(self, cancel: bool = False) -> None: ...
 
 
 def batch_evaluator(executor: Executor, spec: "Spec", env: dict[str, Any], seeds: Sequence[int], skeleton: str):
@@ -276,6 +285,7 @@ class WorkerPool:
         self._busy = [0.0] * workers
         self.threads = [threading.Thread(target=self._dispatch, daemon=True, name=f"colmo-worker-{i}") for i in range(workers)]
         self.workers: list[_Worker | None] = [None] * workers
+        self.n_workers = workers
         for thread in self.threads:
             thread.start()
 

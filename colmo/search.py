@@ -29,7 +29,8 @@ from colmo.generate import Generation, GeneratorError, make_generator
 from colmo.optimize import ProgramResult, optimize_program
 from colmo.program import ParametricProgram, ProgramError, parametrize
 from colmo.prompt import Prompt, build_prompt
-from colmo.sandbox import ForbiddenProgram, WorkerPool, batch_evaluator, check_program
+from colmo.executor import make_executor
+from colmo.sandbox import ForbiddenProgram, batch_evaluator, check_program
 from colmo.spec import Spec, SpecError, load_spec
 from colmo.store import STORE_FILE, ProgramStore, SampleRecord
 from colmo.task import episode_seeds
@@ -120,7 +121,7 @@ class Search:
         self.in_flight_samples = 0
         self.generation_seconds = 0.0
         self.stop_reason = ""
-        self.pool = WorkerPool(cfg.executor.n_workers, cfg.executor.timeout_s, cfg.executor.memory_mb)
+        self.pool = make_executor(cfg.executor)
         in_flight_programs = cfg.llm.batch_size * cfg.search.queue_size
         self.program_threads = concurrent.futures.ThreadPoolExecutor(in_flight_programs, thread_name_prefix="colmo-program")
         self.generator = None
@@ -338,7 +339,7 @@ class Search:
             "queue_depth": self.next_batch - batch.index - 1,
             "evaluations_per_second": self.counters.evaluations / wall,
             "generator_busy": self.generation_seconds / wall,
-            "evaluator_busy": self.pool.busy_seconds / (wall * len(self.pool.workers)),
+            "evaluator_busy": self.pool.busy_seconds / (wall * self.pool.n_workers),
         }
 
     def summary(self) -> dict[str, Any]:
@@ -357,7 +358,7 @@ class Search:
             "evaluations": self.counters.evaluations,
             "seconds": round(wall, 3),
             "generator_busy": round(self.generation_seconds / wall, 4) if wall else 0.0,
-            "evaluator_busy": round(self.pool.busy_seconds / (wall * len(self.pool.workers)), 4) if wall else 0.0,
+            "evaluator_busy": round(self.pool.busy_seconds / (wall * self.pool.n_workers), 4) if wall else 0.0,
             "best_so_far": self.best_so_far,
             "stop_reason": self.stop_reason,
             "run_dir": str(self.run_dir),

@@ -18,7 +18,8 @@ from colmo.config import ConfigError, OptimizeConfig, hydra_app
 from colmo.extract import ExtractionError, extract_policy
 from colmo.optimize import finite_or_none, optimize_program
 from colmo.program import ProgramError, parametrize
-from colmo.sandbox import ForbiddenProgram, WorkerPool, batch_evaluator, check_program
+from colmo.executor import make_executor
+from colmo.sandbox import ForbiddenProgram, batch_evaluator, check_program
 from colmo.spec import SpecError, load_spec
 from colmo.task import episode_seeds
 
@@ -48,10 +49,12 @@ def main(cfg: OptimizeConfig) -> None:
     seeds = episode_seeds(cfg.seed, cfg.task.episodes)
     log.info("%s: %d parameters, gfo=%s budget=%d, %d episodes", cfg.policy_file, program.n_params, cfg.gfo.method, cfg.gfo.budget, len(seeds))
 
-    workers = min(cfg.gfo.workers, cfg.executor.n_workers)
-    with WorkerPool(workers, cfg.executor.timeout_s, cfg.executor.memory_mb) as pool:
-        evaluate_batch = batch_evaluator(pool, spec, cfg.task.env, seeds, program.skeleton)
+    executor = make_executor(cfg.executor, max_workers=cfg.gfo.workers)
+    try:
+        evaluate_batch = batch_evaluator(executor, spec, cfg.task.env, seeds, program.skeleton)
         result = optimize_program(program, evaluate_batch, cfg.gfo, cfg.seed)
+    finally:
+        executor.close()
 
     print(f"score with its own constants: {result.initial.score:.2f}" + (f" (failed: {result.initial.failure})" if result.initial.failure else ""))
     if not result.failure:
