@@ -31,3 +31,15 @@ def last_json_line(stdout: str) -> dict:
 @pytest.fixture
 def examples() -> Path:
     return EXAMPLES
+
+
+def compose(config_name: str, *overrides: str):
+    """A config composed from colmo's bundled configs, as validated dataclasses."""
+    from hydra import compose as hydra_compose
+    from hydra import initialize_config_module
+
+    from colmo.config import CONFIG_MODULE, register_schemas, to_objects
+
+    register_schemas()
+    with initialize_config_module(config_module=CONFIG_MODULE, version_base="1.3"):
+        return to_objects(hydra_compose(config_name=config_name, overrides=list(overrides)))

@@ -1,0 +1,126 @@
+"""The search end to end: outputs, determinism, crash safety and resume."""
+
+import json
+import os
+import random
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from collections import Counter
+
+import pytest
+
+from conftest import compose, run_colmo
+from colmo.search import Search
+
+TINY = ("gfo.budget=4", "task.episodes=2", "tracker=none", "executor.workers=2", "search.progress=false")
+
+
+def store_rows(run_dir):
+    with sqlite3.connect(run_dir / "programs.db") as connection:
+        return connection.execute("SELECT sample, status, key, score FROM samples ORDER BY sample").fetchall()
+
+
+def test_small_search_end_to_end(tmp_path):
+    result = run_colmo("colmo", "search.max_samples=12", *TINY, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    run_dir = next(tmp_path.glob("outputs/pendulum/*"))
+    summary = json.loads((run_dir / "summary.json").read_text())
+    for field in ("best_score", "samples", "programs_evaluated", "duplicates_skipped", "failures", "seconds", "best_so_far"):
+        assert field in summary
+    assert summary["samples"] == 12
+    assert summary["programs_evaluated"] + summary["duplicates_skipped"] + summary["failures"] == 12
+    assert summary["best_so_far"][0][0] == 0 and summary["best_so_far"][-1][1] == summary["best_score"]
+    best = (run_dir / "best_policy.py").read_text()
+    assert "def policy(obs)" in best and f"{summary['best_score']:.2f}" in best
+    rows = store_rows(run_dir)
+    assert [r[0] for r in rows] == list(range(-1, 12))  # the starter, then every sample once
+    assert f"best score {summary['best_score']:.2f}" in result.stdout
+
+
+def test_same_seed_same_search(tmp_path):
+    def run(directory):
+        cfg = compose("search", "search.max_samples=8", "seed=5", *TINY)
+        summary = Search(cfg, tmp_path / directory).run()
+        return summary, store_rows(tmp_path / directory)
+
+    first, second = run("a"), run("b")
+    assert first[1] == second[1]
+    assert first[0]["best_score"] == second[0]["best_score"]
+
+
+def test_duplicates_are_not_evaluated_twice(tmp_path):
+    cfg = compose("search", "search.max_samples=24", *TINY)
+    summary = Search(cfg, tmp_path / "run").run()
+    rows = store_rows(tmp_path / "run")
+    evaluated = [key for _, status, key, _ in rows if status in ("evaluated", "failed")]
+    assert len(evaluated) == len(set(evaluated))
+    assert summary["duplicates_skipped"] == sum(status == "duplicate" for _, status, _, _ in rows)
+
+
+def start_search(tmp_path, *overrides):
+    return subprocess.Popen(
+        [sys.executable, "-m", "colmo", *TINY, *overrides, "hydra.run.dir=run"],
+        cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )
+
+
+def wait_for_samples(run_dir, at_least: int, timeout: float = 120) -> None:
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        try:
+            if len(store_rows(run_dir)) > at_least:
+                return
+        except sqlite3.Error:
+            pass
+        time.sleep(0.2)
+    raise TimeoutError(f"no {at_least} samples in {run_dir} after {timeout} s")
+
+
+def test_sigkill_at_random_moments_then_resume_loses_nothing(tmp_path):
+    run_dir = tmp_path / "run"
+    rng = random.Random(0)
+    process = start_search(tmp_path, "search.max_samples=40")
+    for kill in range(3):
+        wait_for_samples(run_dir, at_least=1 + 4 * kill)
+        time.sleep(rng.uniform(0.0, 2.0))
+        os.killpg(process.pid, signal.SIGKILL)  # the coordinator and its sandbox workers
+        process.wait()
+        process = start_search(tmp_path, "search.max_samples=40", f"resume={run_dir}")
+    assert process.wait(timeout=300) == 0, process.stderr.read()
+    rows = store_rows(run_dir)
+    samples = [r[0] for r in rows]
+    assert len(samples) == len(set(samples))  # no sample counted twice
+    evaluated = Counter(key for _, status, key, _ in rows if status == "evaluated")
+    assert max(evaluated.values()) == 1  # no program evaluated twice
+    summary = json.loads((run_dir / "summary.json").read_text())
+    assert summary["samples"] == len(rows) - 1 == 40
+
+
+def test_sigint_stops_gracefully_and_says_how_to_resume(tmp_path):
+    process = start_search(tmp_path, "search.max_samples=1000")
+    wait_for_samples(tmp_path / "run", at_least=4)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130
+    assert "resume with: python -m colmo task=pendulum resume=" in stderr
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["stop_reason"] == "interrupted" and summary["samples"] >= 4
+    assert (tmp_path / "run" / "best_policy.py").is_file()
+    assert "Traceback" not in stderr
+
+
+@pytest.mark.parametrize("make_dir, overrides, message", [
+    (False, ["resume=/no/such/run"], "resume=/no/such/run is not a colmo run directory"),
+    (True, ["task=cheetah"], "was made with task=pendulum; pass task=pendulum to resume it"),
+])
+def test_bad_resume_directories_exit_2(tmp_path, make_dir, overrides, message):
+    if make_dir:
+        Search(compose("search", "search.max_samples=4", *TINY), tmp_path / "old").run()
+        overrides = [*overrides, f"resume={tmp_path / 'old'}"]
+    result = run_colmo("colmo", *TINY, *overrides, cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.strip().splitlines() == [f"colmo: error: {result.stderr.split('colmo: error: ')[1].strip()}"]
+    assert message in result.stderr
