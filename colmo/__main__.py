@@ -11,8 +11,8 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from colmo.config import SearchConfig, hydra_app
-from colmo.search import Search
-from colmo.store import SampleRecord
+from colmo.spec import load_task_spec
+from colmo.store import SampleRecord, open_for_resume
 
 
 class ProgressLine:
@@ -34,10 +34,23 @@ class ProgressLine:
         self.progress.stop()
 
 
-@hydra_app("search")
+def check_inputs(cfg: SearchConfig) -> None:
+    """The spec file loads and `resume=` names a run of the same task."""
+    load_task_spec(cfg.task.spec)
+    if cfg.resume:
+        open_for_resume(Path(cfg.resume).expanduser(), cfg.task.name).close()
+
+
+@hydra_app("search", check=check_inputs)
 def main(cfg: SearchConfig) -> None:
+    from colmo.search import Search  # heavy imports only once the config is valid
+
     run_dir = Path(HydraConfig.get().runtime.output_dir)
     observers = (ProgressLine(cfg.search.max_samples),) if cfg.search.progress and sys.stderr.isatty() else ()
+    if cfg.tracker.name == "mlflow":
+        from colmo.track import make_tracker
+
+        observers += (make_tracker(cfg, run_dir),)
     summary = Search(cfg, run_dir, observers).run()
     print(summary["best_code"] or "")
     print(

@@ -255,15 +255,25 @@ def to_objects(cfg: DictConfig) -> Any:
 
 
 def one_line(error: BaseException) -> str:
-    text = str(error).strip().splitlines()
-    return text[0] if text else type(error).__name__
+    """The first line of an error, with the first line of its cause when that says more."""
+    first = (str(error).strip().splitlines() or [type(error).__name__])[0]
+    options = getattr(error, "options", None)  # Hydra's MissingConfigException knows the choices
+    if options:
+        choices = [o for o in options if not o.endswith("schema")]
+        return f"{first}; available: {', '.join(choices)}"
+    cause = error.__cause__
+    if cause is not None and str(cause).strip():
+        detail = str(cause).strip().splitlines()[0]
+        if detail not in first:
+            return f"{first.rstrip('.')}: {detail}"
+    return first
 
 
 def _verbose() -> bool:
     return any(arg.replace(" ", "") in ("hydra.verbose=true", "hydra.verbose=True") for arg in sys.argv[1:])
 
 
-def _validate_overrides(config_name: str, overrides: list[str]) -> None:
+def _validate_overrides(config_name: str, overrides: list[str], check: Optional[Callable[[Any], None]]) -> None:
     """Compose the config for every value of every sweep before Hydra starts, so a bad override
     is reported in one line (Hydra's own report is several lines and exits 1)."""
     from hydra import compose, initialize_config_module
@@ -281,11 +291,18 @@ def _validate_overrides(config_name: str, overrides: list[str]) -> None:
                 variants.append(variant)
     with initialize_config_module(config_module=CONFIG_MODULE, version_base="1.3"):
         for variant in variants:
-            to_objects(compose(config_name=config_name, overrides=variant))
+            cfg = to_objects(compose(config_name=config_name, overrides=variant))
+            if check is not None:
+                check(cfg)
 
 
-def hydra_app(config_name: str) -> Callable[[Callable[[Any], Any]], Callable[[], None]]:
-    """`hydra.main` over colmo's bundled configs, with one-line user errors and exit code 2."""
+def hydra_app(
+    config_name: str, check: Optional[Callable[[Any], None]] = None
+) -> Callable[[Callable[[Any], Any]], Callable[[], None]]:
+    """`hydra.main` over colmo's bundled configs, with one-line user errors and exit code 2.
+
+    `check(cfg)` vets the inputs a config names (files, directories) for every job of a sweep
+    before Hydra starts, raising `ConfigError`, so a bad input leaves no output directory."""
 
     def decorate(run: Callable[[Any], Any]) -> Callable[[], None]:
         @functools.wraps(run)
@@ -304,7 +321,7 @@ def hydra_app(config_name: str) -> Callable[[Callable[[Any], Any]], Callable[[],
                 overrides.append(f"hydra.searchpath=[file://{os.path.abspath(config_dir)}]")
             if not any(a in ("--help", "-h", "--hydra-help", "--info", "-i", "--cfg", "-c") for a in sys.argv[1:]):
                 try:
-                    _validate_overrides(config_name, overrides)
+                    _validate_overrides(config_name, overrides, check)
                 except Exception as error:  # every composition error is the user's: one line
                     _fail(error)
             hydra_main()

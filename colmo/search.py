@@ -31,8 +31,8 @@ from colmo.program import ParametricProgram, ProgramError, parametrize
 from colmo.prompt import Prompt, build_prompt
 from colmo.executor import make_executor
 from colmo.sandbox import ForbiddenProgram, batch_evaluator, check_program
-from colmo.spec import Spec, SpecError, load_spec
-from colmo.store import STORE_FILE, ProgramStore, SampleRecord
+from colmo.spec import Spec, load_task_spec
+from colmo.store import STORE_FILE, ProgramStore, SampleRecord, open_for_resume
 from colmo.task import episode_seeds
 
 log = logging.getLogger("colmo.search")
@@ -107,10 +107,7 @@ class Search:
     def __init__(self, cfg: SearchConfig, run_dir: Path, observers: tuple[SearchObserver, ...] = ()):
         self.cfg = cfg
         self.observers = observers
-        try:
-            self.spec: Spec = load_spec(cfg.task.spec)
-        except SpecError as error:
-            raise ConfigError(str(error)) from None
+        self.spec: Spec = load_task_spec(cfg.task.spec)
         self.run_dir = Path(cfg.resume).expanduser().resolve() if cfg.resume else run_dir
         self.store = self._open_store()
         self.seeds = episode_seeds(cfg.seed, cfg.task.episodes)
@@ -131,18 +128,10 @@ class Search:
     # -- set-up and resume ------------------------------------------------------------------
 
     def _open_store(self) -> ProgramStore:
-        path = self.run_dir / STORE_FILE
         if self.cfg.resume:
-            if not path.is_file():
-                raise ConfigError(f"resume={self.cfg.resume} is not a colmo run directory (no {STORE_FILE} in it)")
-            store = ProgramStore(path)
-            made_with = store.meta().get("task")
-            if made_with != self.cfg.task.name:
-                store.close()
-                raise ConfigError(f"resume={self.cfg.resume} was made with task={made_with}; pass task={made_with} to resume it")
-            return store
+            return open_for_resume(self.run_dir, self.cfg.task.name)
         self.run_dir.mkdir(parents=True, exist_ok=True)
-        store = ProgramStore(path)
+        store = ProgramStore(self.run_dir / STORE_FILE)
         store.set_meta(task=self.cfg.task.name, spec=str(self.spec.path), seed=self.cfg.seed)
         return store
 
@@ -244,25 +233,25 @@ class Search:
         self.generation_seconds += seconds
         batch = _Batch(self.next_batch, prompt, seconds, time.perf_counter())
         self.next_batch += 1
-        in_batch: set[str] = set()
         for generation in generations:
             record = _record(self.next_sample, batch.index, prompt.island, list(prompt.parent_keys), generation)
             self.next_sample += 1
             self.in_flight_samples += 1
-            batch.pending.append(self._submit(record, generation, in_batch))
+            batch.pending.append(self._submit(record, generation))
         return batch
 
-    def _submit(self, record: SampleRecord, generation: Generation, in_batch: set[str]) -> _Pending:
+    def _submit(self, record: SampleRecord, generation: Generation) -> _Pending:
         try:
             program = parametrize(extract_policy(generation.text))
         except (ExtractionError, ProgramError) as error:
             record.failure = f"unusable output: {error}"
             return self._settled(record)
         record.key, record.skeleton, record.initial_params = program.key, program.skeleton, list(program.values)
-        if self.database.is_known(program.key) or program.key in in_batch:
+        if self.database.is_known(program.key):
             record.status = "duplicate"
             return self._settled(record)
-        in_batch.add(program.key)
+        # Known from now on, so a batch generated before this one is integrated skips it too.
+        self.database.mark_seen(program.key)
         try:
             check_program(program.skeleton, self.spec.allowed_imports)
         except ForbiddenProgram as error:

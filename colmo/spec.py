@@ -85,3 +85,13 @@ def load_spec(name_or_path: str) -> Spec:
         raise SpecError(f"{path}: the spec file needs a `make_environment(**options)` function")
     allowed = tuple(dict.fromkeys(DEFAULT_IMPORTS + tuple(getattr(module, "ALLOWED_IMPORTS", ()))))
     return Spec(path.stem, path, description, starter, make_environment, allowed)
+
+
+def load_task_spec(name_or_path: str) -> Spec:
+    """`load_spec` for a configured task: a bad spec is the user's configuration error."""
+    from colmo.config import ConfigError
+
+    try:
+        return load_spec(name_or_path)
+    except SpecError as error:
+        raise ConfigError(str(error)) from None

@@ -17,6 +17,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Iterator, Optional
 
+from colmo.config import ConfigError
+
 STORE_FILE = "programs.db"
 
 _SCHEMA = """
@@ -120,3 +122,16 @@ class ProgramStore:
 
     def close(self) -> None:
         self.connection.close()
+
+
+def open_for_resume(run_dir: Path, task: str) -> ProgramStore:
+    """The store of an earlier run of `task`; `ConfigError` if `run_dir` is not one."""
+    path = Path(run_dir) / STORE_FILE
+    if not path.is_file():
+        raise ConfigError(f"resume={run_dir} is not a colmo run directory (no {STORE_FILE} in it)")
+    store = ProgramStore(path)
+    made_with = store.meta().get("task")
+    if made_with != task:
+        store.close()
+        raise ConfigError(f"resume={run_dir} was made with task={made_with}; pass task={made_with} to resume it")
+    return store

@@ -21,7 +21,6 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
-import nevergrad as ng
 import numpy as np
 
 from colmo.config import ConfigError, GFOConfig
@@ -50,6 +49,8 @@ class Method(abc.ABC):
 
 class NevergradMethod(Method):
     def __init__(self, optimizer_name: str, dim: int, cfg: GFOConfig, seed: int):
+        import nevergrad as ng  # seconds to import: only when a run tunes something
+
         parametrization = ng.p.Array(init=np.zeros(dim))
         parametrization.random_state = np.random.RandomState(seed)
         self.optimizer = ng.optimizers.registry[optimizer_name](

@@ -20,7 +20,7 @@ from colmo.optimize import finite_or_none, optimize_program
 from colmo.program import ProgramError, parametrize
 from colmo.executor import make_executor
 from colmo.sandbox import ForbiddenProgram, batch_evaluator, check_program
-from colmo.spec import SpecError, load_spec
+from colmo.spec import load_task_spec
 from colmo.task import episode_seeds
 
 log = logging.getLogger("colmo.optimize")
@@ -39,12 +39,14 @@ def read_policy(path: str, allowed_imports: tuple[str, ...]):
     return program
 
 
-@hydra_app("optimize")
+def check_inputs(cfg: OptimizeConfig) -> None:
+    """The spec file loads and the policy file holds a usable policy."""
+    read_policy(cfg.policy_file, load_task_spec(cfg.task.spec).allowed_imports)
+
+
+@hydra_app("optimize", check=check_inputs)
 def main(cfg: OptimizeConfig) -> None:
-    try:
-        spec = load_spec(cfg.task.spec)
-    except SpecError as error:
-        raise ConfigError(str(error)) from None
+    spec = load_task_spec(cfg.task.spec)
     program = read_policy(cfg.policy_file, spec.allowed_imports)
     seeds = episode_seeds(cfg.seed, cfg.task.episodes)
     log.info("%s: %d parameters, gfo=%s budget=%d, %d episodes", cfg.policy_file, program.n_params, cfg.gfo.method, cfg.gfo.budget, len(seeds))

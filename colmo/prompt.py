@@ -1,0 +1,150 @@
+"""Prompts: turning a selection of programs into the text a generator sees (paper Fig. 3).
+
+The selected programs appear as `policy_v0`, `policy_v1`, ... in ascending score, each with
+its tuned constants inlined, and the prompt ends with the header of the next version for the
+model to complete. Scores are not shown, as in the paper and FunSearch: the order alone says
+which program is better, and the model is asked for structure, not for numbers.
+
+Helpers the programs define (module-level functions, classes, constants) are shown once,
+above the versions. A helper that differs from one already shown under the same name, or
+that uses such a helper, gets a version suffix (`wrap_v1`) so that every version still calls
+its own helpers. Code is re-rendered with `ast.unparse`, which drops comments.
+"""
+
+from __future__ import annotations
+
+import ast
+import copy
+import math
+from dataclasses import dataclass
+
+from colmo.database import Selection
+
+NUMPY_IMPORT = "import numpy as np"
+
+
+@dataclass(frozen=True)
+class Prompt:
+    text: str  # completion form: ends with the header of the version to write
+    messages: list[dict[str, str]]  # chat form: a system and a user message
+    programs: list[str]  # the shown programs' code as stored, ascending score
+    island: int
+    parent_keys: list[str]
+
+
+def _system_message(function_name: str, args: str) -> str:
+    return (
+        "You are an expert control engineer who writes control policies as short Python functions. "
+        f"Answer with one Python function `{function_name}({args})` in a ```python code block. "
+        "numpy is available as np; use only numpy and math. Improve the structure of the policy: "
+        "its numeric constants are tuned automatically by an optimizer afterwards, so focus on the "
+        "structure, not on the values."
+    )
+
+
+def build_prompt(description: str, selection: Selection, function_name: str = "policy") -> Prompt:
+    """The prompt showing `selection.programs` (ascending score) as `{function_name}_v0..`."""
+    programs = selection.programs
+    assert programs, "a prompt shows at least one program"
+    assert all(math.isfinite(program.score) for program in programs), "failed programs are never shown"
+    assert all(a.score <= b.score for a, b in zip(programs, programs[1:])), "programs must be in ascending score"
+
+    imports, definitions, versions, args = _render([program.code for program in programs], function_name)
+    new, previous = f"{function_name}_v{len(programs)}", f"{function_name}_v{len(programs) - 1}"
+    docstring = (
+        f'"""{description.strip()}\n\n'
+        f"On every iteration, improve {previous} over the {function_name}_vX methods from previous iterations.\n"
+        '"""'
+    )
+    context = docstring + "\n\n" + "\n\n\n".join(["\n".join(imports), *definitions, *versions])
+    header = f'def {new}({args}):\n    """Improved version of {previous}."""\n'
+    # The chat form leaves out the header: the instruction asks for the function instead.
+    request = f"Write {new}, an improved version of {previous}. Name it `{function_name}` in your answer."
+    messages = [
+        {"role": "system", "content": _system_message(function_name, args)},
+        {"role": "user", "content": f"```python\n{context}\n```\n\n{request}"},
+    ]
+    return Prompt(
+        text=context + "\n\n\n" + header,
+        messages=messages,
+        programs=[program.code for program in programs],
+        island=selection.island,
+        parent_keys=[program.key for program in programs],
+    )
+
+
+def _render(codes: list[str], function_name: str) -> tuple[list[str], list[str], list[str], str]:
+    """Imports, shared definitions and versioned functions of `codes`, and the arguments of the
+    last version (the next version keeps its signature)."""
+    imports = {NUMPY_IMPORT: None}  # ordered sets
+    definitions: dict[str, None] = {}
+    shown: dict[str, str] = {}  # name bound by a shown definition -> that definition's text
+    versions = []
+    for version, code in enumerate(codes):
+        statements = ast.parse(code).body
+        policies = [s for s in statements if isinstance(s, ast.FunctionDef) and s.name == function_name]
+        if not policies:
+            raise ValueError(f"program {version} of the prompt defines no {function_name}()")
+        for statement in statements:
+            if isinstance(statement, (ast.Import, ast.ImportFrom)):
+                imports[ast.unparse(statement)] = None
+        helpers = [s for s in statements if s not in policies and not _is_docstring(s) and not isinstance(s, (ast.Import, ast.ImportFrom))]
+
+        renames = {function_name: f"{function_name}_v{version}"}
+        # Renaming one helper changes the text of the helpers that use it: repeat to a fixpoint.
+        changed = True
+        while changed:
+            changed = False
+            for helper in helpers:
+                text = ast.unparse(_renamed(helper, renames))
+                for name in _bound_names(helper):
+                    if name not in renames and shown.get(name, text) != text:
+                        renames[name] = f"{name}_v{version}"
+                        changed = True
+        for helper in helpers:
+            text = ast.unparse(_renamed(helper, renames))
+            definitions[text] = None
+            for name in _bound_names(helper):
+                shown.setdefault(renames.get(name, name), text)
+
+        policy = _renamed(policies[-1], renames)  # the last definition is the one Python keeps
+        if version > 0:
+            if ast.get_docstring(policy, clean=False) is not None:
+                policy.body.pop(0)
+            policy.body.insert(0, ast.Expr(ast.Constant(f"Improved version of {function_name}_v{version - 1}.")))
+        versions.append(ast.unparse(policy))
+    return list(imports), list(definitions), versions, ast.unparse(policies[-1].args)
+
+
+def _is_docstring(statement: ast.stmt) -> bool:
+    return isinstance(statement, ast.Expr) and isinstance(statement.value, ast.Constant) and isinstance(statement.value.value, str)
+
+
+def _bound_names(statement: ast.stmt) -> list[str]:
+    """Module-level names a definition binds."""
+    if isinstance(statement, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+        return [statement.name]
+    if isinstance(statement, ast.Assign):
+        return [node.id for target in statement.targets for node in ast.walk(target) if isinstance(node, ast.Name)]
+    if isinstance(statement, ast.AnnAssign) and isinstance(statement.target, ast.Name):
+        return [statement.target.id]
+    return []
+
+
+class _Rename(ast.NodeTransformer):
+    def __init__(self, names: dict[str, str]) -> None:
+        self.names = names
+
+    def visit_Name(self, node: ast.Name) -> ast.Name:
+        node.id = self.names.get(node.id, node.id)
+        return node
+
+    def visit_FunctionDef(self, node: ast.FunctionDef) -> ast.FunctionDef:
+        node.name = self.names.get(node.name, node.name)
+        return self.generic_visit(node)
+
+    visit_AsyncFunctionDef = visit_ClassDef = visit_FunctionDef
+
+
+def _renamed(node: ast.AST, names: dict[str, str]) -> ast.AST:
+    return _Rename(names).visit(copy.deepcopy(node))

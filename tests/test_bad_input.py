@@ -1,0 +1,48 @@
+"""Bad input to `python -m colmo`: one clear line naming the problem and the fix, exit code 2.
+
+The README's bad-input table is this test's cases and the messages they print.
+"""
+
+import pytest
+
+from conftest import run_colmo
+
+SPEC_WITH_SYNTAX_ERROR = '"""A task."""\ndef make_environment(:\n'
+SPEC_WITHOUT_POLICY = '"""A task."""\nfrom colmo.environments.pendulum import PendulumSwingup\n\ndef make_environment(**options):\n    return PendulumSwingup(**options)\n'
+
+CASES = [
+    (["task=nope"], "Could not find 'task/nope'; available: a1, ball_in_cup, cheetah, pendulum, quadruped"),
+    (["llm=gpt5"], "Could not find 'llm/gpt5'"),
+    (["gfo=sgd"], "Could not find 'gfo/sgd'"),
+    (["executor=slurm"], "Could not find 'executor/slurm'"),
+    (["search.max_sampels=10"], "Could not override 'search.max_sampels': Key 'max_sampels' not in 'SearchLoopConfig'"),
+    (["search.max_samples=-1"], "search.max_samples must be >= 1, got -1"),
+    (["gfo.budget=0"], "gfo.budget must be >= 1, got 0"),
+    (["gfo.budget=ten"], "Value 'ten' of type 'str' could not be converted to Integer"),
+    (["task.episodes=0"], "task.episodes must be >= 1, got 0"),
+    (["database.num_islands=0"], "database.num_islands must be >= 1, got 0"),
+    (["llm.batch_size=0"], "llm.batch_size must be >= 1, got 0"),
+    (["executor.timeout_s=-1"], "executor.timeout_s must be > 0, got -1.0"),
+    (["task.spec=missing_spec.py"], "spec file not found: 'missing_spec.py'"),
+    (["task.spec={tmp}/syntax.py"], "syntax error in spec file: invalid syntax"),
+    (["task.spec={tmp}/no_policy.py"], "no starter `def policy(obs)` in the spec file"),
+    (["resume={tmp}"], "is not a colmo run directory (no programs.db in it)"),
+]
+
+
+@pytest.mark.parametrize("overrides, message", CASES, ids=[" ".join(o) for o, _ in CASES])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, overrides, message):
+    (tmp_path / "syntax.py").write_text(SPEC_WITH_SYNTAX_ERROR)
+    (tmp_path / "no_policy.py").write_text(SPEC_WITHOUT_POLICY)
+    overrides = [o.format(tmp=tmp_path) for o in overrides]
+    result = run_colmo("colmo", *overrides, "tracker=none", cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("colmo: error: ") and message in lines[0], lines[0]
+    assert not (tmp_path / "outputs").exists()  # nothing ran
+
+
+def test_verbose_shows_the_traceback(tmp_path):
+    result = run_colmo("colmo", "gfo.budget=0", "tracker=none", "hydra.verbose=true", cwd=tmp_path)
+    assert result.returncode != 0 and "Traceback" in result.stderr

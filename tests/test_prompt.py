@@ -1,0 +1,208 @@
+"""Prompt rendering (paper Fig. 3): versions in ascending score, renaming, helpers, chat form."""
+
+from __future__ import annotations
+
+import pytest
+
+from colmo.config import DatabaseConfig
+from colmo.database import ProgramDatabase, Selection, StoredProgram
+from colmo.program import instantiate, parametrize
+from colmo.prompt import build_prompt
+from colmo.spec import load_spec
+
+DESCRIPTION = "Balance the pole.\n\nObservation: [angle, velocity]."
+LOW = StoredProgram("k-low", "import numpy as np\n\ndef policy(obs):\n    return 0.0", 1.0, 2, 5)
+HIGH = StoredProgram("k-high", "import numpy as np\n\ndef policy(obs):\n    return -2.5 * obs[0] - 0.3 * obs[1]", 4.0, 2, 9)
+
+EXPECTED = '''"""Balance the pole.
+
+Observation: [angle, velocity].
+
+On every iteration, improve policy_v1 over the policy_vX methods from previous iterations.
+"""
+
+import numpy as np
+
+
+def policy_v0(obs):
+    return 0.0
+
+
+def policy_v1(obs):
+    """Improved version of policy_v0."""
+    return -2.5 * obs[0] - 0.3 * obs[1]
+
+
+def policy_v2(obs):
+    """Improved version of policy_v1."""
+'''
+
+
+def stored(code: str, score: float, key: str = "k") -> StoredProgram:
+    return StoredProgram(key, code, score, 0, 0)
+
+
+def test_two_programs_exact_text_and_fields():
+    prompt = build_prompt(DESCRIPTION, Selection(2, [LOW, HIGH]))
+    assert prompt.text == EXPECTED
+    assert prompt.programs == [LOW.code, HIGH.code]
+    assert prompt.parent_keys == ["k-low", "k-high"]
+    assert prompt.island == 2
+
+
+def test_chat_messages_hold_the_same_programs_and_ask_for_the_next_version():
+    prompt = build_prompt(DESCRIPTION, Selection(2, [LOW, HIGH]))
+    assert [m["role"] for m in prompt.messages] == ["system", "user"]
+    system, user = (m["content"] for m in prompt.messages)
+    for phrase in ("control engineer", "`policy(obs)`", "```python", "only numpy and math", "optimizer", "structure"):
+        assert phrase in system
+    context = EXPECTED[: EXPECTED.index("\n\n\ndef policy_v2")]
+    assert user == f"```python\n{context}\n```\n\nWrite policy_v2, an improved version of policy_v1. Name it `policy` in your answer."
+
+
+def test_pendulum_starter_from_the_database():
+    spec = load_spec("pendulum.py")
+    program = parametrize(spec.starter_code)
+    starter = StoredProgram(program.key, instantiate(program.skeleton, program.values), 0.0, 0, -1)
+    selection = ProgramDatabase(DatabaseConfig(num_islands=3), starter, seed=0).select()
+    prompt = build_prompt(spec.description, selection)
+    assert prompt.text == (
+        f'"""{spec.description}\n\n'
+        "On every iteration, improve policy_v0 over the policy_vX methods from previous iterations.\n"
+        '"""\n\n'
+        "import numpy as np\n\n\n"
+        "def policy_v0(obs):\n    action = 0.0\n    return action\n\n\n"
+        'def policy_v1(obs):\n    """Improved version of policy_v0."""\n'
+    )
+    assert prompt.parent_keys == [program.key] and prompt.island == selection.island
+
+
+def test_first_version_keeps_its_docstring_later_ones_get_improved_version_of():
+    codes = [
+        'def policy(obs):\n    """Returns a control action."""\n    return 0.0',
+        'def policy(obs):\n    """Something else."""\n    return 1.0',
+        "def policy(obs):\n    return 2.0",
+    ]
+    text = build_prompt("Task.", Selection(0, [stored(c, float(i)) for i, c in enumerate(codes)])).text
+    assert 'def policy_v0(obs):\n    """Returns a control action."""\n    return 0.0\n' in text
+    assert 'def policy_v1(obs):\n    """Improved version of policy_v0."""\n    return 1.0\n' in text
+    assert 'def policy_v2(obs):\n    """Improved version of policy_v1."""\n    return 2.0\n' in text
+    assert "Something else" not in text
+    assert text.endswith('def policy_v3(obs):\n    """Improved version of policy_v2."""\n')
+    assert "improve policy_v2 over the policy_vX methods" in text
+
+
+def test_renaming_covers_recursion_but_not_attributes_or_strings():
+    code = 'def policy(obs, depth=2.0):\n    if depth <= 0:\n        return obs.policy + len("policy")\n    return policy(obs, depth - 1.0)'
+    text = build_prompt("Task.", Selection(0, [stored("def policy(obs):\n    return 0.0", 0.0), stored(code, 1.0)])).text
+    assert (
+        'def policy_v1(obs, depth=2.0):\n    """Improved version of policy_v0."""\n    if depth <= 0:\n'
+        '        return obs.policy + len(\'policy\')\n    return policy_v1(obs, depth - 1.0)\n'
+    ) in text
+    # The next version takes the signature of the best program shown.
+    assert text.endswith('def policy_v2(obs, depth=2.0):\n    """Improved version of policy_v1."""\n')
+
+
+HELPERS_V0 = """import math
+LIMIT = 1.0
+
+def wrap(angle):
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+def clip(u):
+    return max(-LIMIT, min(LIMIT, u))
+
+def control(x):
+    return clip(-x)
+
+def policy(obs):
+    return control(wrap(obs[0]))
+"""
+
+# Same LIMIT, wrap and control text, but clip differs, so control (which calls it) differs too.
+HELPERS_V1 = '''"""Module docstrings are dropped."""
+import math
+from math import pi
+LIMIT = 1.0
+
+def control(x):
+    return clip(-x)
+
+def wrap(angle):
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+def clip(u):
+    return np.clip(u, -LIMIT, LIMIT)
+
+def policy(obs):
+    return control(wrap(obs[0]) - pi)
+'''
+
+
+def test_helpers_are_shown_once_and_conflicting_ones_get_a_version_suffix():
+    text = build_prompt("Task.", Selection(0, [stored(HELPERS_V0, 1.0), stored(HELPERS_V1, 2.0)])).text
+    body = text[text.index('"""\n\n') + 5 :]
+    assert body == '''import numpy as np
+import math
+from math import pi
+
+
+LIMIT = 1.0
+
+
+def wrap(angle):
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+def clip(u):
+    return max(-LIMIT, min(LIMIT, u))
+
+
+def control(x):
+    return clip(-x)
+
+
+def control_v1(x):
+    return clip_v1(-x)
+
+
+def clip_v1(u):
+    return np.clip(u, -LIMIT, LIMIT)
+
+
+def policy_v0(obs):
+    return control(wrap(obs[0]))
+
+
+def policy_v1(obs):
+    """Improved version of policy_v0."""
+    return control_v1(wrap(obs[0]) - pi)
+
+
+def policy_v2(obs):
+    """Improved version of policy_v1."""
+'''
+
+
+def test_other_function_name():
+    code = "def controller(x):\n    return controller(x)"
+    prompt = build_prompt("Task.", Selection(0, [stored(code, 0.0)]), function_name="controller")
+    assert "def controller_v0(x):\n    return controller_v0(x)\n" in prompt.text
+    assert prompt.text.endswith('def controller_v1(x):\n    """Improved version of controller_v0."""\n')
+    assert "`controller(x)`" in prompt.messages[0]["content"]
+
+
+@pytest.mark.parametrize("score", [float("nan"), float("-inf"), float("inf")])
+def test_a_failed_program_is_never_shown(score):
+    with pytest.raises(AssertionError, match="failed programs"):
+        build_prompt("Task.", Selection(0, [LOW, stored(HIGH.code, score)]))
+
+
+def test_programs_must_come_in_ascending_score():
+    with pytest.raises(AssertionError, match="ascending"):
+        build_prompt("Task.", Selection(0, [HIGH, LOW]))
+
+
+def test_a_program_without_the_function_is_rejected():
+    with pytest.raises(ValueError, match=r"defines no policy\(\)"):
+        build_prompt("Task.", Selection(0, [stored("def act(obs):\n    return 0.0", 0.0)]))
