@@ -90,7 +90,7 @@ def plain_mujoco_loop(env, policy) -> Callable[[int], None]:
             angles = np.array([data.joint(name).qpos[0] for name in joints])
             velocities = np.array([data.joint(name).qvel[0] for name in joints])
             rotation = data.body("trunk").xmat.reshape(3, 3)
-            velocity = rotation.T @ data.joint(model.joint(0).name).qvel[:3]
+            velocity = rotation.T @ data.joint(0).qvel[:3]  # the free joint: trunk linear velocity
             data.ctrl[:] = np.asarray(policy(np.concatenate([angles, velocities, velocity])))
             mujoco.mj_step(model, data, env.n_sub_steps)
 
