@@ -12,7 +12,6 @@ import sys
 import threading
 import time
 import types
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import numpy as np
 import pytest
@@ -24,7 +23,7 @@ from colmo.program import parametrize
 from colmo.prompt import Prompt
 from colmo.spec import load_spec
 
-from conftest import EXAMPLES
+from conftest import EXAMPLES, FakeOpenAIServer
 
 STARTER = load_spec("pendulum.py").starter_code
 PAPER_PENDULUM = (EXAMPLES / "paper_pendulum.py").read_text()
@@ -137,73 +136,6 @@ def test_the_zero_observation_check_stops_endless_loops():
 
 
 # ---------------------------------------------------------------------- openai: a real server
-
-class FakeOpenAIServer:
-    """An OpenAI-compatible chat-completions server on 127.0.0.1 whose next answers can be
-    scripted: "500", "429", "400", "garbage" (not JSON), "html" (not a completion), "empty"."""
-
-    def __init__(self, honour_n: bool = True, delay: float = 0.0):
-        self.requests: list[dict] = []
-        self.script: list[str] = []
-        self.max_active = 0
-        self._active = 0
-        self._lock = threading.Lock()
-        owner = self
-
-        class Handler(BaseHTTPRequestHandler):
-            def log_message(self, *args):
-                pass
-
-            def do_POST(self):
-                body = json.loads(self.rfile.read(int(self.headers["Content-Length"])))
-                with owner._lock:
-                    owner.requests.append({"path": self.path, "authorization": self.headers.get("Authorization"), "body": body})
-                    behaviour = owner.script.pop(0) if owner.script else "ok"
-                    owner._active += 1
-                    owner.max_active = max(owner.max_active, owner._active)
-                time.sleep(delay)
-                with owner._lock:
-                    owner._active -= 1
-                n = body.get("n", 1) if honour_n else 1
-                if behaviour in ("500", "429", "400"):
-                    self.reply(int(behaviour), {"error": {"message": f"scripted {behaviour}", "type": "error"}})
-                elif behaviour == "garbage":
-                    self.reply(200, b"{not json", content_type="application/json")
-                elif behaviour == "html":
-                    self.reply(200, b"<html>proxy error</html>", content_type="text/html")
-                else:
-                    content = "" if behaviour == "empty" else None
-                    self.reply(200, completion(body, n, content))
-
-            def reply(self, status, payload, content_type="application/json"):
-                data = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
-                self.send_response(status)
-                self.send_header("Content-Type", content_type)
-                self.send_header("Content-Length", str(len(data)))
-                self.end_headers()
-                self.wfile.write(data)
-
-        self._server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
-        self._thread = threading.Thread(target=self._server.serve_forever, kwargs={"poll_interval": 0.01}, daemon=True)
-        self._thread.start()
-        self.url = f"http://127.0.0.1:{self._server.server_address[1]}/v1"
-
-    def close(self) -> None:
-        self._server.shutdown()
-        self._server.server_close()
-
-
-def completion(body: dict, n: int, content: str | None) -> dict:
-    answers = [f"```python\ndef policy(obs):\n    return {i}.0 * obs[0]\n```" if content is None else content for i in range(n)]
-    choices = [
-        {"index": i, "message": {"role": "assistant", "content": answer}, "finish_reason": "stop"}
-        for i, answer in enumerate(answers)
-    ]
-    return {
-        "id": "chatcmpl-test", "object": "chat.completion", "created": int(time.time()), "model": body["model"],
-        "choices": choices, "usage": {"prompt_tokens": 10, "completion_tokens": 5 * n, "total_tokens": 10 + 5 * n},
-    }
-
 
 @pytest.fixture
 def server():
