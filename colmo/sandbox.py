@@ -1,12 +1,57 @@
 """Sandboxed evaluation: untrusted policy code runs only in worker processes, never here.
 
-A program first passes a static check of its AST (only allowed imports, no dangerous
-builtins, no dunder attributes). Each worker is a fresh interpreter (`python -m
-colmo.sandbox`) started with a clean environment (no API keys or tokens), in its own
-session and a private temporary directory, with resource limits (address space, CPU time,
-no file writes, no core dumps). The coordinator talks to it over a dedicated socket, so
-whatever the policy prints cannot corrupt the protocol. An evaluation that outlives the
-wall-clock timeout gets its worker's whole process group killed and replaced.
+Every program was written by a model and is treated as hostile. The layers, outermost first:
+
+* **Static check** (`check_program`, run here before submitting and again in the worker): imports
+  only of numpy (its `linalg`, `random`, `fft`, `emath` submodules), math and what the spec
+  declares; no unsafe builtins (`open`, `exec`, `getattr`, `type`, `vars`, ...); no name
+  starting with `__`, no attribute starting with `_` (dunders, internals such as `np._core`); no
+  attribute that
+  reads or writes files or reaches native code (`np.load`, `arr.tofile`, `arr.ctypes`, ...) or
+  leaks frames and code (`gi_frame`, `f_globals`, `tb_frame`, `co_code`, ...); no
+  `str.format`/`format_map`, whose `{0.__class__}` fields would walk attributes unchecked; no
+  class definitions, `global` or `nonlocal`; no attribute assignment except on the program's
+  own functions (`policy.state = ...`), so `np.clip = ...` is refused.
+* **Namespace**: the program runs with an allowlist of builtins (`print` discards its output)
+  and an `__import__` that hands out private copies of the allowed modules' public API, made
+  afresh for every evaluation: whatever a program does to its `np`, the evaluator (which uses
+  the real numpy) and every other program never see it. Copies are plain modules, so the
+  policy's `np.sin` costs what it costs on numpy itself. The program's module code runs afresh
+  for every evaluation too, so nothing it keeps carries over from one evaluation to the next,
+  and everything it made is released (its generators' clean-up runs) before the result is sent.
+  Each evaluation runs in its own `contextvars` context, so numpy's error and print state
+  (`np.seterr`) is restored after it.
+* **Process**: each worker is a fresh interpreter (`python -m colmo.sandbox`, never a fork of
+  this process, so it holds none of its secrets), started with a clean environment (no API keys
+  or tokens), in its own session, its cwd a private temporary directory, with rlimits: address
+  space (memory), no core dumps, file size 0 (no file writes; SIGXFSZ ignored so a write fails
+  instead of killing it), CPU time per evaluation, and no new processes while program code runs
+  (RLIMIT_NPROC, which the kernel does not apply to root). At start-up the worker also asks to
+  be killed if its parent dies, moves into a network namespace of its own where it can (root or
+  user namespaces: then it has no network at all), and replaces the process-creation and
+  signalling functions of `os`, `posix` and `_posixsubprocess` with ones that refuse, as defence
+  in depth.
+* **Supervision**: an evaluation that outlives the wall-clock timeout gets its worker's whole
+  process group killed, and a fresh worker replaces it. The worker's reply is JSON, parsed and
+  checked here, never unpickled: even a worker taken over by a program cannot run code here.
+
+Decisions on the ambiguous cases:
+* `np.random.seed`, `set_state` and the distribution functions are allowed: the evaluator
+  reseeds the global generator at every episode and environments draw their initial states from
+  their own generators, so a policy can only fix its own noise. `set_bit_generator` and
+  `get_bit_generator` are refused: swapping the global generator's bit generator, or holding its
+  lock, would break the evaluator's reseeding for the programs that follow in the worker.
+* `print` is allowed and its output discarded; `str.format` and `format_map` are refused
+  (f-strings, whose fields the check sees, and `%` formatting are fine).
+* Numpy's other submodules (`lib`, `ma`, `testing`, `ctypeslib`, `f2py`, `core`, `rec`, ...) are
+  not importable: they read and write files, unpickle, or reach native code.
+
+Failure reasons are one line of printable characters (a program chooses its exception messages;
+they must not inject lines or terminal escapes into logs), at most 500 characters: a category and
+the details: `syntax error: ...`, `forbidden:
+...`, `invalid: ...`, `exception: ZeroDivisionError: ... (step 3)`, `memory: ...`, `timeout:
+...`, `cpu time: ...`, `crash: ...`, `environment: ...` (the spec's fault), and the evaluator's
+`bad action ...`, `non-finite action ...`, `unstable simulation: ...`.
 
 What crosses to a worker is plain data (`EvalRequest`: spec path, environment options,
 episode seeds, skeleton code, parameters), so any executor can carry it.
@@ -17,6 +62,11 @@ from __future__ import annotations
 import ast
 import builtins
 import concurrent.futures
+import contextvars
+import ctypes
+import gc
+import importlib
+import json
 import os
 import queue
 import resource
@@ -28,72 +78,257 @@ import sys
 import tempfile
 import threading
 import time
+import types
 from collections import OrderedDict
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
-from typing import TYPE_CHECKING, Any, Protocol, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Collection, Protocol, Sequence
 
 from colmo.task import Evaluation
 
 if TYPE_CHECKING:
     from colmo.spec import Spec
 
+# Builtins a policy cannot use. They are absent from its namespace anyway (it holds only
+# `_SAFE_BUILTIN_NAMES`); the check names them for a clear reason, unless the program binds the
+# name itself (`dir = np.sign(v)` is a variable, not the builtin).
 FORBIDDEN_NAMES = frozenset({
-    "open", "exec", "eval", "compile", "__import__", "globals", "locals", "vars", "getattr",
-    "setattr", "delattr", "input", "breakpoint", "exit", "quit", "help", "memoryview",
-    "__builtins__", "__loader__", "__spec__", "classmethod", "staticmethod", "super", "type",
-    "object", "dir",
+    "open", "exec", "eval", "compile", "globals", "locals", "vars", "getattr", "setattr", "delattr",
+    "input", "breakpoint", "exit", "quit", "help", "memoryview", "classmethod", "staticmethod",
+    "super", "type", "object", "dir",
 })
-# numpy functions that read or write files or reach native code.
+# Attributes that read or write files, unpickle, reach native code or internals, or change
+# state the evaluator relies on: refused on any object.
 FORBIDDEN_ATTRIBUTES = frozenset({
-    "load", "loadtxt", "genfromtxt", "fromfile", "tofile", "save", "savez", "savez_compressed",
-    "savetxt", "memmap", "ctypeslib", "lib", "DataSource", "fromregex", "testing", "f2py",
-    "distutils", "show_config", "setbufsize", "seterrcall", "system", "popen",
+    "load", "loads", "loadtxt", "genfromtxt", "fromfile", "fromregex", "tofile", "dump", "save",
+    "savez", "savez_compressed", "savetxt", "memmap", "DataSource", "ctypes", "cffi", "ctypeslib",
+    "lib", "core", "testing", "test", "f2py", "distutils", "info", "show_config", "show_runtime",
+    "setbufsize", "seterrcall", "set_bit_generator", "get_bit_generator", "as_strided", "system",
+    "popen", "format", "format_map", "mro",
 })
-_SAFE_BUILTINS = {
-    name: getattr(builtins, name)
-    for name in dir(builtins)
-    if not name.startswith("_") and name not in FORBIDDEN_NAMES
+# Generator, coroutine, frame, traceback and code attributes: each leads to the frames (and so
+# the globals and locals) of the evaluator that called the policy.
+_FRAME_ATTRIBUTE_PREFIXES = ("gi_", "cr_", "ag_", "f_", "tb_", "co_")
+# numpy's submodules a policy may import; the others read or write files (lib, ma, rec),
+# reach native code (ctypeslib, f2py) or internals (core, testing).
+_NUMPY_SUBMODULES = frozenset({"linalg", "random", "fft", "emath"})
+# Fields of AST nodes that bind or name an identifier (besides Name, Attribute and imports).
+_IDENTIFIER_FIELDS = {
+    ast.FunctionDef: "name", ast.AsyncFunctionDef: "name", ast.arg: "arg", ast.keyword: "arg",
+    ast.ExceptHandler: "name", ast.MatchAs: "name", ast.MatchStar: "name", ast.MatchMapping: "rest",
 }
+_MAX_REASON_CHARS = 500
+_MAX_REPLY_BYTES = 1 << 20
 
 
 class ForbiddenProgram(ValueError):
     """The program failed the static check; the message is the stored failure reason."""
 
 
+def _one_line(reason: str) -> str:
+    """A failure reason as stored and logged: bounded, one line, printable."""
+    return "".join(c if c.isprintable() else " " for c in reason[:_MAX_REASON_CHARS])
+
+
+def _module_allowed(name: str, allowed: Collection[str]) -> bool:
+    parts = name.split(".")
+    if parts[0] not in allowed or any(part.startswith("_") for part in parts):
+        return False
+    return parts[0] != "numpy" or len(parts) == 1 or (len(parts) == 2 and parts[1] in _NUMPY_SUBMODULES)
+
+
+def _attribute_allowed(name: str) -> bool:
+    return not (name.startswith("_") or name in FORBIDDEN_ATTRIBUTES or name.startswith(_FRAME_ATTRIBUTE_PREFIXES))
+
+
+def _bindings(tree: ast.AST) -> tuple[set[str], set[str]]:
+    """The names the program defines with `def`, and the names it binds any other way."""
+    functions, others = set(), set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            functions.add(node.name)
+        elif isinstance(node, ast.Name) and not isinstance(node.ctx, ast.Load):
+            others.add(node.id)
+        elif isinstance(node, ast.alias):
+            others.add((node.asname or node.name).split(".")[0])
+        elif isinstance(node, (ast.arg, ast.ExceptHandler, ast.MatchAs, ast.MatchStar, ast.MatchMapping)):
+            others.add(getattr(node, _IDENTIFIER_FIELDS[type(node)]))
+    return functions, others
+
+
+def _problem(node: ast.AST, allowed: frozenset[str], own_functions: set[str], bound: set[str]) -> str | None:
+    """What is forbidden about one AST node, or None. `own_functions`: names that can only refer
+    to a function the program defines (a `def` name bound nowhere else); `bound`: all names the
+    program binds."""
+    if isinstance(node, ast.Import):
+        return next((f"import {a.name}" for a in node.names if not _module_allowed(a.name, allowed)), None)
+    if isinstance(node, ast.ImportFrom):
+        module = "." * node.level + (node.module or "")
+        if node.level or not _module_allowed(module, allowed):
+            return f"import {module}"
+        return next((f"import {module}.{a.name}" for a in node.names if a.name != "*" and not _attribute_allowed(a.name)), None)
+    if isinstance(node, ast.Name):
+        return node.id if node.id.startswith("__") or (node.id in FORBIDDEN_NAMES and node.id not in bound) else None
+    if isinstance(node, ast.Attribute):
+        if not _attribute_allowed(node.attr):
+            return f".{node.attr}"
+        if not isinstance(node.ctx, ast.Load) and not (isinstance(node.value, ast.Name) and node.value.id in own_functions):
+            return f"{'deletion of' if isinstance(node.ctx, ast.Del) else 'assignment to'} {ast.unparse(node)}"
+        return None
+    if isinstance(node, ast.MatchClass):  # `case C(attr=x)` reads C's attribute `attr`
+        return next((f".{name}" for name in node.kwd_attrs if not _attribute_allowed(name)), None)
+    if isinstance(node, (ast.Global, ast.Nonlocal)):
+        return f"{type(node).__name__.lower()} statement"
+    if isinstance(node, ast.ClassDef):
+        return f"class definition ({node.name})"
+    identifier = getattr(node, _IDENTIFIER_FIELDS.get(type(node), ""), None)
+    if isinstance(node, ast.alias):
+        identifier = node.asname
+    return identifier if identifier and identifier.startswith("__") else None
+
+
 def check_program(code: str, allowed_imports: Sequence[str]) -> None:
-    """Reject code that imports or touches what a policy has no business with."""
+    """Reject code that imports or touches what a policy has no business with (module docstring).
+
+    Raises `ForbiddenProgram`, whose message is the failure reason."""
     try:
         tree = ast.parse(code)
     except SyntaxError as error:
-        raise ForbiddenProgram(f"syntax error: {error.msg} (line {error.lineno})") from None
-    allowed = set(allowed_imports)
+        line = f" (line {error.lineno})" if error.lineno else ""
+        raise ForbiddenProgram(_one_line(f"syntax error: {error.msg}{line}")) from None
+    except (RecursionError, MemoryError, ValueError) as error:  # absurd nesting; null bytes (some versions)
+        raise ForbiddenProgram(f"syntax error: {str(error) or 'too deeply nested to parse'}") from None
+    allowed = frozenset(allowed_imports)
+    functions, others = _bindings(tree)
     for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            modules = [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            modules = [node.module or ""] if node.level == 0 else ["."]
+        problem = _problem(node, allowed, functions - others, functions | others)
+        if problem:
+            raise ForbiddenProgram(_one_line(f"forbidden: {problem}"))
+
+
+# -- the namespace a program runs in ----------------------------------------------------------
+
+def _discard(*args: object, **kwargs: object) -> None:
+    """`print` for policies: allowed, so that a debugging print does not fail a program, but silent."""
+
+
+_SAFE_BUILTIN_NAMES = (
+    "abs", "all", "any", "ascii", "bin", "bool", "bytearray", "bytes", "callable", "chr", "complex",
+    "dict", "divmod", "enumerate", "filter", "float", "format", "frozenset", "hasattr", "hash", "hex",
+    "int", "isinstance", "issubclass", "iter", "len", "list", "map", "max", "min", "next", "oct",
+    "ord", "pow", "range", "repr", "reversed", "round", "set", "slice", "sorted", "str", "sum",
+    "tuple", "zip", "Ellipsis", "NotImplemented",
+)
+_SAFE_BUILTINS: dict[str, Any] = {
+    **{name: getattr(builtins, name) for name in _SAFE_BUILTIN_NAMES},
+    # Exception classes, so that programs can raise and catch them.
+    **{name: value for name, value in vars(builtins).items() if isinstance(value, type) and issubclass(value, BaseException)},
+    "print": _discard,
+}
+# Per process: the public API of each allowed top-level module, as a tree of modules that is
+# never handed out; each program gets a copy (`_copy_tree`).
+_TEMPLATES: dict[str, types.ModuleType] = {}
+
+
+def _frozen(value: Any) -> Any:
+    """Read-only stand-ins for a module's mutable containers (numpy's `typecodes`, `sctypeDict`)."""
+    if isinstance(value, dict):
+        return types.MappingProxyType(dict(value))
+    if isinstance(value, (list, set)):
+        return tuple(value) if isinstance(value, list) else frozenset(value)
+    return value
+
+
+def _public_api(module: types.ModuleType, path: str) -> types.ModuleType:
+    """A module holding `module`'s public names a policy may use, allowed submodules included."""
+    if path == "numpy":
+        for name in _NUMPY_SUBMODULES:
+            getattr(module, name)  # numpy imports some of them on first access
+    api = types.ModuleType(path, module.__doc__)
+    root = path.split(".")[0]
+    for name, value in vars(module).items():
+        if not _attribute_allowed(name):
+            continue
+        if isinstance(value, types.ModuleType):
+            child = f"{path}.{name}"
+            # A submodule, not a module it imported (numpy's `emath` is `numpy.lib.scimath`).
+            if _module_allowed(child, {root}) and (value.__name__ == child or root == "numpy"):
+                setattr(api, name, _public_api(value, child))
         else:
-            modules = []
-        for module in modules:
-            if module.split(".")[0] not in allowed:
-                raise ForbiddenProgram(f"forbidden: import {module}")
-        if isinstance(node, ast.Name) and node.id in FORBIDDEN_NAMES:
-            raise ForbiddenProgram(f"forbidden: {node.id}")
-        if isinstance(node, ast.Attribute) and (node.attr.startswith("__") or node.attr in FORBIDDEN_ATTRIBUTES):
-            raise ForbiddenProgram(f"forbidden: .{node.attr}")
-        if isinstance(node, (ast.Global, ast.Nonlocal)):
-            raise ForbiddenProgram(f"forbidden: {type(node).__name__.lower()} statement")
+            setattr(api, name, _frozen(value))
+    return api
 
 
-def _guarded_import(allowed: frozenset[str]):
+def _submodule(module: types.ModuleType, name: str) -> types.ModuleType | None:
+    for part in name.split(".")[1:]:
+        module = vars(module).get(part)
+        if not isinstance(module, types.ModuleType):
+            return None
+    return module
+
+
+def _template(name: str) -> types.ModuleType:
+    root = name.split(".")[0]
+    template = _TEMPLATES.get(root)
+    if template is None or _submodule(template, name) is None:
+        importlib.import_module(root if root == "numpy" else name)  # numpy's are loaded by _public_api
+        template = _TEMPLATES[root] = _public_api(sys.modules[root], root)
+        if _submodule(template, name) is None:
+            raise ModuleNotFoundError(f"no module named {name!r}")
+    return template
+
+
+def _copy_tree(template: types.ModuleType) -> types.ModuleType:
+    """A private copy of a module tree: what a program assigns to its copy stays there."""
+    copy = types.ModuleType(template.__name__)
+    namespace = vars(copy)
+    namespace.update(vars(template))
+    for name, value in namespace.items():
+        if isinstance(value, types.ModuleType):
+            namespace[name] = _copy_tree(value)
+    return copy
+
+
+def _guarded_import(allowed: frozenset[str]) -> Callable[..., types.ModuleType]:
+    """`__import__` for one program: allowed modules only, as copies private to the program."""
+    copies: dict[str, types.ModuleType] = {}
+
     def import_(name: str, globals=None, locals=None, fromlist=(), level=0):  # noqa: A002 - mirrors __import__
-        if level or name.split(".")[0] not in allowed:
-            raise ImportError(f"import of {name!r} is not allowed")
-        return builtins.__import__(name, globals, locals, fromlist, level)
+        if level or not _module_allowed(name, allowed):
+            raise ForbiddenProgram(f"forbidden: import {name}")
+        root = name.split(".")[0]
+        if root not in copies or _submodule(copies[root], name) is None:
+            copies[root] = _copy_tree(_template(name))
+        return _submodule(copies[root], name) if fromlist else copies[root]
 
     return import_
 
+
+def _namespace(allowed_imports: Sequence[str], params: Sequence[float]) -> dict[str, Any]:
+    safe = dict(_SAFE_BUILTINS, __import__=_guarded_import(frozenset(allowed_imports)))
+    return {"__builtins__": safe, "__name__": "policy_module", "params": params}
+
+
+def _compile(skeleton: str, allowed_imports: Sequence[str]) -> types.CodeType:
+    check_program(skeleton, allowed_imports)
+    return compile(skeleton, "<policy>", "exec")
+
+
+def _execute(code: types.CodeType, namespace: dict[str, Any]) -> None:
+    exec(code, namespace)
+    if not callable(namespace.get("policy")):
+        raise ForbiddenProgram("invalid: no callable `policy` in the program")
+
+
+def compile_policy(skeleton: str, allowed_imports: Sequence[str], params: Sequence[float] = ()) -> dict[str, Any]:
+    """Check a skeleton, run it in a namespace of safe builtins and private module copies, and
+    return that namespace. The skeleton reads its constants from the global `params`."""
+    namespace = _namespace(allowed_imports, params)
+    _execute(_compile(skeleton, allowed_imports), namespace)
+    return namespace
+
+
+# -- requests and executors -------------------------------------------------------------------
 
 @dataclass(frozen=True)
 class EvalRequest:
@@ -135,17 +370,12 @@ def batch_evaluator(executor: Executor, spec: "Spec", env: dict[str, Any], seeds
     return evaluate_batch
 
 
-def compile_policy(skeleton: str, allowed_imports: Sequence[str]) -> dict[str, Any]:
-    """Execute a checked skeleton in a namespace of safe builtins; return that namespace.
+# -- the worker process -----------------------------------------------------------------------
 
-    The skeleton reads its constants from the global `params`, set per candidate."""
-    check_program(skeleton, allowed_imports)
-    safe = dict(_SAFE_BUILTINS, __import__=_guarded_import(frozenset(allowed_imports)))
-    namespace: dict[str, Any] = {"__builtins__": safe, "__name__": "policy_module", "params": ()}
-    exec(compile(skeleton, "<policy>", "exec"), namespace)
-    if not callable(namespace.get("policy")):
-        raise ForbiddenProgram("no callable `policy` in the program")
-    return namespace
+def _describe(error: BaseException, where: str = "") -> str:
+    if isinstance(error, MemoryError):
+        return f"memory: {str(error) or 'out of memory'}{where}"
+    return f"exception: {type(error).__name__}: {error}{where}"
 
 
 class _WorkerState:
@@ -153,7 +383,7 @@ class _WorkerState:
 
     def __init__(self, max_programs: int = 64):
         self.environments: dict[tuple, Any] = {}
-        self.programs: OrderedDict[tuple, dict[str, Any]] = OrderedDict()
+        self.programs: OrderedDict[tuple, types.CodeType] = OrderedDict()
         self.max_programs = max_programs
 
     def environment(self, request: EvalRequest):
@@ -162,14 +392,16 @@ class _WorkerState:
             from colmo.spec import load_spec
 
             self.environments[key] = load_spec(request.spec).make_environment(**dict(request.env))
+            # What exists now lives as long as the worker: keep the collections below cheap.
+            gc.freeze()
         return self.environments[key]
 
-    def program(self, request: EvalRequest) -> dict[str, Any]:
+    def code(self, request: EvalRequest) -> types.CodeType:
         key = (request.skeleton, request.allowed_imports)
         if key in self.programs:
             self.programs.move_to_end(key)
         else:
-            self.programs[key] = compile_policy(request.skeleton, request.allowed_imports)
+            self.programs[key] = _compile(request.skeleton, request.allowed_imports)
             if len(self.programs) > self.max_programs:
                 self.programs.popitem(last=False)
         return self.programs[key]
@@ -181,17 +413,27 @@ class _WorkerState:
             env = self.environment(request)
         except Exception as error:  # the spec is the user's, not the program's: say so
             return Evaluation(failure=f"environment: {type(error).__name__}: {error}")
+        namespace = _namespace(request.allowed_imports, request.params)
+        # No new processes or threads while program code runs. Only the soft limit: the next
+        # environment built may need threads (MuJoCo's compiler uses them).
+        nproc = resource.getrlimit(resource.RLIMIT_NPROC)
+        resource.setrlimit(resource.RLIMIT_NPROC, (0, nproc[1]))
         try:
-            namespace = self.program(request)
-        except ForbiddenProgram as error:
-            return Evaluation(failure=str(error))
-        except BaseException as error:  # module-level code of an untrusted program
-            return Evaluation(failure=f"exception: {type(error).__name__}: {error} (at import)")
-        namespace["params"] = request.params
-        try:
+            try:
+                _execute(self.code(request), namespace)
+            except ForbiddenProgram as error:
+                return Evaluation(failure=str(error))
+            except BaseException as error:  # module-level code of an untrusted program
+                return Evaluation(failure=_describe(error, " (at import)"))
             return evaluate_policy(env, namespace["policy"], list(request.seeds))
         except BaseException as error:  # SystemExit and friends raised by the policy
-            return Evaluation(failure=f"exception: {type(error).__name__}: {error}")
+            return Evaluation(failure=_describe(error))
+        finally:
+            # Release everything the program made now, so that its clean-up code (a suspended
+            # generator's `finally`) runs here, within its own time limit, not in the next program.
+            namespace.clear()
+            gc.collect()
+            resource.setrlimit(resource.RLIMIT_NPROC, nproc)
 
 
 def _limit_cpu_time(seconds: float) -> None:
@@ -201,10 +443,61 @@ def _limit_cpu_time(seconds: float) -> None:
     resource.setrlimit(resource.RLIMIT_CPU, (soft if hard == resource.RLIM_INFINITY else min(soft, hard), hard))
 
 
-def _worker_main(fd: int, timeout_s: float) -> None:
+_PR_SET_PDEATHSIG = 1
+_CLONE_NEWUSER, _CLONE_NEWNET = 0x10000000, 0x40000000
+# Functions a worker never needs once started: process creation and signals. Everything that
+# starts a process (`subprocess.Popen`, `os.spawn*`, `pty`) ends in one of these. Only functions
+# are replaced: a module imported later may subclass a class (`ssl` subclasses `socket.socket`).
+_DISARMED = {
+    "os": ("fork", "forkpty", "system", "popen", "execv", "execve", "posix_spawn", "posix_spawnp",
+           "kill", "killpg", "setsid", "setpgid", "setpgrp"),
+    "posix": ("fork", "forkpty", "system", "execv", "execve", "posix_spawn", "posix_spawnp", "kill",
+              "killpg", "setsid", "setpgid", "setpgrp"),
+    "_posixsubprocess": ("fork_exec",),
+    "subprocess": ("_fork_exec",),  # its own reference to _posixsubprocess.fork_exec
+}
+
+
+def _refuse(*args: object, **kwargs: object) -> None:
+    raise PermissionError("not permitted in a sandbox worker")
+
+
+def _isolate(parent_pid: int) -> None:
+    """Start-up hardening that needs the worker's own process (see the module docstring)."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent_pid:  # the coordinator died before prctl took effect
+        os._exit(1)
+    # Best effort: needs root, or unprivileged user namespaces for the second form.
+    if libc.unshare(_CLONE_NEWNET) != 0:
+        libc.unshare(_CLONE_NEWUSER | _CLONE_NEWNET)
+    for module_name, names in _DISARMED.items():
+        module = sys.modules.get(module_name)
+        for name in names:
+            if module is not None and hasattr(module, name):
+                setattr(module, name, _refuse)
+
+
+def _encode(evaluation: Evaluation) -> bytes:
+    failure = _one_line(evaluation.failure) if evaluation.failure else None
+    return json.dumps({"returns": [float(r) for r in evaluation.returns], "failure": failure}).encode()
+
+
+def _decode(data: bytes) -> Evaluation:
+    """A worker's reply, checked: the worker runs untrusted code, so its bytes are data only."""
+    reply = json.loads(data)
+    returns, failure = reply["returns"], reply["failure"]
+    if not isinstance(returns, list) or not all(type(r) is float for r in returns) or not isinstance(failure, (str, type(None))):
+        raise ValueError("malformed reply")
+    return Evaluation(tuple(returns), _one_line(failure) if failure else None)
+
+
+def _worker_main(fd: int, timeout_s: float, parent_pid: int) -> None:
+    _isolate(parent_pid)
+    gc.freeze()
     connection = Connection(fd)
     state = _WorkerState()
-    connection.send(("ready", os.getpid()))
+    connection.send_bytes(b"ready")
     while True:
         try:
             request = connection.recv()
@@ -213,8 +506,14 @@ def _worker_main(fd: int, timeout_s: float) -> None:
         if request is None:
             return
         _limit_cpu_time(timeout_s)
-        connection.send(state.evaluate(request))
+        try:
+            evaluation = contextvars.copy_context().run(state.evaluate, request)
+        except BaseException as error:  # describing the failure failed too (out of memory); memory is free again
+            evaluation = Evaluation(failure=_describe(error))
+        connection.send_bytes(_encode(evaluation))
 
+
+# -- the coordinator's side -------------------------------------------------------------------
 
 def _apply_limits(memory_mb: int) -> None:
     """Runs in the child between fork and exec."""
@@ -234,6 +533,8 @@ def clean_environment(tmpdir: str) -> dict[str, str]:
     env = {name: os.environ[name] for name in _PASSED_VARIABLES if name in os.environ}
     env.update(
         HOME=tmpdir, TMPDIR=tmpdir, PYTHONDONTWRITEBYTECODE="1", PYTHONNOUSERSITE="1",
+        # The same hash() of a string in every worker: a policy's score must not depend on which ran it.
+        PYTHONHASHSEED="0",
         # One worker per core: numerical libraries must not spawn thread pools of their own.
         OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
     )
@@ -241,8 +542,8 @@ def clean_environment(tmpdir: str) -> dict[str, str]:
 
 
 _WORKER_EXITS = {
-    -signal.SIGKILL: "killed (SIGKILL): out of memory or killed from outside",
-    -signal.SIGXCPU: "cpu time limit exceeded",
+    -signal.SIGKILL: "crash: the worker was killed (SIGKILL): out of memory, or killed from outside",
+    -signal.SIGXCPU: "cpu time: the evaluation exceeded its CPU time limit",
     -signal.SIGSEGV: "crash: segmentation fault",
 }
 
@@ -251,7 +552,7 @@ class _Worker:
     def __init__(self, memory_mb: int, timeout_s: float, tmpdir: str):
         parent, child = socket.socketpair()
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "colmo.sandbox", str(child.fileno()), str(timeout_s)],
+            [sys.executable, "-m", "colmo.sandbox", str(child.fileno()), str(timeout_s), str(os.getpid())],
             pass_fds=(child.fileno(),), env=clean_environment(tmpdir), cwd=tmpdir,
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             start_new_session=True, preexec_fn=lambda: _apply_limits(memory_mb),
@@ -268,8 +569,16 @@ class _Worker:
         self.connection.close()
 
     def exit_reason(self) -> str:
-        code = self.process.wait()
-        return _WORKER_EXITS.get(code, f"worker exited with code {code}")
+        """Why the worker stopped answering; it may still be running if it broke the protocol."""
+        try:
+            code = self.process.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            return "crash: the worker broke the protocol"
+        if code in _WORKER_EXITS:
+            return _WORKER_EXITS[code]
+        if code < 0:
+            return f"crash: the worker was killed by {signal.Signals(-code).name}"
+        return f"crash: the worker exited with code {code}"
 
 
 class WorkerPool:
@@ -305,13 +614,15 @@ class WorkerPool:
         return [future.result() for future in [self.submit(request) for request in requests]]
 
     def _start_worker(self) -> _Worker:
+        # Started from the dispatcher thread that uses it: the worker's parent-death signal
+        # follows that thread, which lives as long as the pool.
         worker = _Worker(self.memory_mb, self.timeout_s, self.tmpdir)
         if not worker.connection.poll(self.startup_timeout_s):
             worker.kill()
             raise RuntimeError("a sandbox worker did not start in time")
         try:
-            worker.connection.recv()
-        except EOFError:
+            worker.connection.recv_bytes(16)
+        except (EOFError, OSError):
             raise RuntimeError(f"a sandbox worker failed to start: {worker.exit_reason()}") from None
         return worker
 
@@ -341,10 +652,12 @@ class WorkerPool:
         try:
             worker.connection.send(request)
             if worker.connection.poll(self.timeout_s):
-                return worker.connection.recv()
-            reason = f"timeout: evaluation took longer than {self.timeout_s:g} s"
+                return _decode(worker.connection.recv_bytes(_MAX_REPLY_BYTES))
+            reason = f"timeout: the evaluation took longer than {self.timeout_s:g} s"
         except (EOFError, OSError):
             reason = worker.exit_reason()
+        except (ValueError, KeyError, TypeError):
+            reason = "crash: malformed reply from the worker"
         worker.kill()
         self.workers[index] = None
         return Evaluation(failure=reason)
@@ -380,4 +693,4 @@ class WorkerPool:
 
 
 if __name__ == "__main__":
-    _worker_main(int(sys.argv[1]), float(sys.argv[2]))
+    _worker_main(int(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3]))

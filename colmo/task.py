@@ -145,7 +145,7 @@ def as_action(raw: object, action_size: int) -> np.ndarray:
     """The policy's output as a finite `(action_size,)` array, or `PolicyFailure` saying what is wrong."""
     try:
         action = np.asarray(raw, dtype=np.float64)
-    except (TypeError, ValueError) as error:
+    except (TypeError, ValueError, OverflowError) as error:
         raise PolicyFailure(f"bad action: {type(raw).__name__} is not numeric ({error})") from None
     if action.shape != (action_size,):
         if action.size == action_size and action.ndim <= 1:
@@ -167,7 +167,11 @@ def rollout(env: Environment, policy: Policy, seed: int) -> float:
     size = env.action_size
     for step in range(env.horizon):
         try:
-            raw = policy(obs)
+            # A copy: an environment may return a view of its simulation state (`self.data.qpos`),
+            # which a policy writing to its `obs` would otherwise change.
+            raw = policy(obs.copy())
+        except MemoryError as error:
+            raise PolicyFailure(f"memory: {str(error) or 'out of memory'} (step {step})") from None
         except Exception as error:  # the policy is untrusted code: any error is its failure
             raise PolicyFailure(f"exception: {type(error).__name__}: {error} (step {step})") from None
         try:

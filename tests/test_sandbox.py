@@ -1,0 +1,225 @@
+"""The sandbox's static check, the namespace a program runs in, and the worker protocol.
+
+No worker processes here (see test_hostile.py for hostile programs run end to end): these are
+the rules themselves, each with the program that would break it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import pickle
+
+import numpy as np
+import pytest
+
+from colmo.program import parametrize
+from colmo.sandbox import ForbiddenProgram, _decode, _encode, check_program, compile_policy
+from colmo.task import Evaluation, PolicyFailure, as_action, evaluate_policy
+from colmo.environments.pendulum import PendulumSwingup
+
+IMPORTS = ("numpy", "math")
+
+
+def reason(code: str, imports=IMPORTS) -> str | None:
+    try:
+        check_program(code, imports)
+    except ForbiddenProgram as error:
+        return str(error)
+    return None
+
+
+@pytest.mark.parametrize("name", ["paper_pendulum", "paper_ball_in_cup", "paper_cheetah", "paper_quadruped", "paper_a1", "pendulum_mistuned"])
+def test_the_paper_policies_pass(examples, name):
+    assert reason(parametrize((examples / f"{name}.py").read_text()).skeleton) is None
+
+
+@pytest.mark.parametrize("code", [
+    "import numpy.linalg as la\nfrom numpy.random import normal\nfrom numpy import *\nimport math\n",
+    "import numpy as np\nfrom numpy import fft, emath\nx = np.random.default_rng(0).normal()\n",
+    # State on the program's own function, and builtin names used as variables.
+    "def policy(obs):\n    if not hasattr(policy, 'n'):\n        policy.n = 0\n    policy.n += 1\n    return 0.0\n",
+    "def policy(obs):\n    dir = 1 if obs[0] > 0 else -1\n    type = 'pd'\n    return dir\n",
+    "import numpy as np\ndef policy(obs):\n    with np.errstate(all='ignore'):\n        return f'{obs!r}' and np.sign(obs[0]) * (lambda v: v)(1.0)\n",
+    "def policy(obs):\n    match obs.shape:\n        case (3,):\n            return 0.0\n    try:\n        pass\n    except ValueError as error:\n        return error.args\n",
+])
+def test_ordinary_policies_pass(code):
+    assert reason(code) is None
+
+
+@pytest.mark.parametrize("code, expected", [
+    # Modules a policy has no business with, however they are reached.
+    ("import os", "forbidden: import os"),
+    ("import sys", "forbidden: import sys"),
+    ("import subprocess", "forbidden: import subprocess"),
+    ("import socket", "forbidden: import socket"),
+    ("import ctypes", "forbidden: import ctypes"),
+    ("import importlib", "forbidden: import importlib"),
+    ("import pickle", "forbidden: import pickle"),
+    ("import multiprocessing", "forbidden: import multiprocessing"),
+    ("from os import path", "forbidden: import os"),
+    ("from . import x", "forbidden: import ."),
+    ("import numpy.testing", "forbidden: import numpy.testing"),
+    ("import numpy.ctypeslib", "forbidden: import numpy.ctypeslib"),
+    ("import numpy.lib.npyio", "forbidden: import numpy.lib.npyio"),
+    ("import numpy._core", "forbidden: import numpy._core"),
+    ("import numpy.random.mtrand", "forbidden: import numpy.random.mtrand"),
+    ("from numpy import load", "forbidden: import numpy.load"),
+    ("from numpy import _core", "forbidden: import numpy._core"),
+    # Builtins that execute code, reach objects by name, or do I/O.
+    ("open('/etc/passwd')", "forbidden: open"),
+    ("exec('1')", "forbidden: exec"),
+    ("eval('1')", "forbidden: eval"),
+    ("compile('1', '', 'eval')", "forbidden: compile"),
+    ("__import__('os')", "forbidden: __import__"),
+    ("globals()", "forbidden: globals"),
+    ("getattr(1, '__cl' + 'ass__')", "forbidden: getattr"),
+    ("vars(np)", "forbidden: vars"),
+    ("type(())", "forbidden: type"),
+    ("breakpoint()", "forbidden: breakpoint"),
+    ("__builtins__['open']", "forbidden: __builtins__"),
+    # Object-graph walks to builtins, globals and frames.
+    ("().__class__.__base__.__subclasses__()", "forbidden: .__subclasses__"),
+    ("[].__class__", "forbidden: .__class__"),
+    ("np.__dict__", "forbidden: .__dict__"),
+    ("'{0.__class__}'.format(1)", "forbidden: .format"),
+    ("'{x}'.format_map({})", "forbidden: .format_map"),
+    ("int.mro()", "forbidden: .mro"),
+    ("g = (x for x in []); g.gi_frame", "forbidden: .gi_frame"),
+    ("g.gi_code", "forbidden: .gi_code"),
+    ("c.cr_frame", "forbidden: .cr_frame"),
+    ("frame.f_back", "forbidden: .f_back"),
+    ("frame.f_globals", "forbidden: .f_globals"),
+    ("frame.f_builtins", "forbidden: .f_builtins"),
+    ("tb.tb_frame", "forbidden: .tb_frame"),
+    ("policy.co_code", "forbidden: .co_code"),
+    ("try:\n    1 / 0\nexcept Exception as e:\n    e.__traceback__", "forbidden: .__traceback__"),
+    ("match x:\n    case int(ctypes=c):\n        pass", "forbidden: .ctypes"),
+    # Numpy's file, pickle and native-code paths.
+    ("np.load('x.npy')", "forbidden: .load"),
+    ("np.fromfile('/proc/self/environ')", "forbidden: .fromfile"),
+    ("np.loadtxt('/etc/passwd')", "forbidden: .loadtxt"),
+    ("np.genfromtxt('/etc/passwd')", "forbidden: .genfromtxt"),
+    ("np.save('x', obs)", "forbidden: .save"),
+    ("obs.tofile('x')", "forbidden: .tofile"),
+    ("obs.dump('x')", "forbidden: .dump"),
+    ("obs.ctypes.data", "forbidden: .ctypes"),
+    ("np.ctypeslib.load_library('libc', '/lib')", "forbidden: .ctypeslib"),
+    ("np.lib.stride_tricks", "forbidden: .lib"),
+    ("np.core.multiarray", "forbidden: .core"),
+    ("np._core", "forbidden: ._core"),
+    ("np.testing.assert_equal", "forbidden: .testing"),
+    ("np.random.set_bit_generator(g)", "forbidden: .set_bit_generator"),
+    # Monkeypatching, directly or through an alias, and what else changes shared objects.
+    ("np.clip = lambda *a, **k: 0", "forbidden: assignment to np.clip"),
+    ("np.isfinite = lambda x: True", "forbidden: assignment to np.isfinite"),
+    ("np.random.seed = print", "forbidden: assignment to np.random.seed"),
+    ("m = np\nm.asarray = list", "forbidden: assignment to m.asarray"),
+    ("del np.clip", "forbidden: deletion of np.clip"),
+    ("def policy(obs):\n    pass\npolicy = np\npolicy.clip = 0", "forbidden: assignment to policy.clip"),
+    ("def f(policy):\n    policy.clip = 0", "forbidden: assignment to policy.clip"),
+    ("class A:\n    pass", "forbidden: class definition (A)"),
+    ("def f():\n    global np", "forbidden: global statement"),
+    ("def __del__():\n    pass", "forbidden: __del__"),
+    ("import numpy as __builtins__", "forbidden: __builtins__"),
+])
+def test_forbidden(code, expected):
+    assert reason("import numpy as np\n" + code) == expected
+
+
+@pytest.mark.parametrize("code, expected", [
+    ("def policy(obs)\n    return 0", "syntax error: expected ':' (line 1)"),
+    ("x = " + "-" * 100_000 + "1", "syntax error: too deeply nested to parse"),
+    ("x = 1" + " + 1" * 200_000, "syntax error: maximum recursion depth exceeded during ast construction"),
+    ("x = 1\0", "syntax error: source code string cannot contain null bytes"),
+])
+def test_unparsable_programs_are_rejected_without_crashing(code, expected):
+    assert reason(code) == expected
+
+
+def test_spec_declared_imports_are_allowed():
+    assert reason("import json\nfrom json import dumps", IMPORTS + ("json",)) is None
+    assert reason("import json", IMPORTS) == "forbidden: import json"
+
+
+def namespace(code: str) -> dict:
+    return compile_policy("import numpy as np\nimport math\n" + code + "\ndef policy(obs):\n    return 0.0\n", IMPORTS)
+
+
+def test_builtins_are_an_allowlist_and_print_is_silent(capsys):
+    builtins = namespace("print('x' * 1000)")["__builtins__"]
+    assert capsys.readouterr().out == ""
+    assert {"abs", "min", "range", "ZeroDivisionError", "SystemExit", "print"} <= set(builtins)
+    assert not {"open", "getattr", "type", "vars", "id", "object", "help", "input", "__build_class__"} & set(builtins)
+
+
+def test_numpy_is_a_copy_of_its_safe_public_api():
+    np_ = namespace("")["np"]
+    assert np_ is not np and np_.sin is np.sin and np_.random.normal is np.random.normal
+    for name in ("linalg", "random", "fft", "emath"):
+        assert getattr(np_, name).__name__.startswith("numpy.")
+    for name in ("lib", "ma", "testing", "ctypeslib", "f2py", "core", "rec", "load", "save", "fromfile", "memmap", "info"):
+        assert not hasattr(np_, name), name
+    assert not hasattr(np_.random, "mtrand") and not hasattr(np_.random, "set_bit_generator")
+    with pytest.raises(TypeError):
+        np_.typecodes["All"] = ""  # shared containers are read-only copies
+
+
+def test_a_programs_monkeypatching_stays_in_its_own_copy():
+    """Even if a program got past the check and patched its numpy, neither the evaluator nor the
+    next program would see it: each program gets private copies of the modules."""
+    patched = namespace("")
+    patched["np"].isfinite = lambda x: True  # what `np.isfinite = ...` would do, past the check
+    patched["np"].random.seed = lambda seed: None
+    patched["math"].pi = 3.0
+    assert np.isfinite is not patched["np"].isfinite and np.random.seed is not patched["np"].random.seed
+    with pytest.raises(PolicyFailure, match="non-finite action"):
+        as_action(float("nan"), 1)
+    fresh = namespace("")
+    assert fresh["np"].isfinite is np.isfinite and fresh["np"].random.seed is np.random.seed and fresh["math"].pi == math.pi
+
+
+def test_the_policy_gets_a_copy_of_the_observation():
+    """Writing to `obs` must not reach the simulation, even for an environment whose
+    observation is a view of its state."""
+
+    class ViewingPendulum(PendulumSwingup):
+        def observation(self):
+            return self.data.qpos  # a view into MjData
+
+    code = "def policy(obs):\n    obs[0] = 0.0\n    return 0.0\n"  # holding the pole upright: 1000 points
+    env = ViewingPendulum()
+    honest = evaluate_policy(env, compile_policy("def policy(obs):\n    return 0.0\n", IMPORTS)["policy"], [3])
+    assert evaluate_policy(env, compile_policy(code, IMPORTS)["policy"], [3]) == honest
+
+
+def test_module_level_constants_read_params():
+    program = parametrize("GAIN = 2.5\ndef policy(obs):\n    return GAIN * obs[2]\n")
+    assert compile_policy(program.skeleton, IMPORTS, program.values)["GAIN"] == 2.5
+
+
+def test_a_program_without_policy_is_invalid():
+    with pytest.raises(ForbiddenProgram, match="^invalid: no callable `policy`"):
+        compile_policy("x = 1\n", IMPORTS)
+
+
+def test_replies_round_trip_and_reasons_are_truncated():
+    evaluation = Evaluation((1.0, 2.5), None)
+    assert _decode(_encode(evaluation)) == evaluation
+    failed = _decode(_encode(Evaluation((), "exception: ValueError: " + "x" * 10_000)))
+    assert failed.failure.startswith("exception: ValueError: x") and len(failed.failure) == 500
+    # A program chooses its exception messages: no line breaks or terminal escapes reach the logs.
+    assert _decode(_encode(Evaluation((), "exception: ValueError: a\nb\x1b[2J"))).failure == "exception: ValueError: a b [2J"
+
+
+@pytest.mark.parametrize("reply", [
+    pickle.dumps(Evaluation((1e9,), None)),  # never unpickled: a worker could send any object
+    b"not json",
+    json.dumps([1.0]).encode(),
+    json.dumps({"returns": ["1"], "failure": None}).encode(),
+    json.dumps({"returns": [], "failure": 3}).encode(),
+    json.dumps({"returns": []}).encode(),
+])
+def test_malformed_replies_are_refused(reply):
+    with pytest.raises((ValueError, KeyError, TypeError)):
+        _decode(reply)
