@@ -40,6 +40,13 @@ class ExtractionError(ValueError):
 
 def extract_policy(text: str, function_name: str = "policy") -> str:
     """The policy module (imports, helpers, `def policy`) in a language model's answer."""
+    try:
+        return _extract(text, function_name)
+    except (RecursionError, MemoryError):  # the parser and AST visitors recurse per nesting level
+        raise ExtractionError("the answer is nested too deeply to parse") from None
+
+
+def _extract(text: str, function_name: str) -> str:
     version = re.compile(rf"{re.escape(function_name)}(?:_v\d+)?")
     statements = [s for block in _fenced_blocks(text) for module in _code_regions(block) for s in module.body]
     if not _versions(statements, version):

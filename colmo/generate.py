@@ -30,8 +30,9 @@ New constants get random signs and plausible magnitudes: the GFO tunes them afte
 Observation indices stay below the observation size, read from "obs size is N" or "Observation
 (size N)" in the prompt, else from the indices the programs read. A candidate is redrawn unless
 its structure key (`colmo.program`: the search's duplicate test) differs from its parents' and
-its siblings', and it runs on a zero observation (under the sandbox's static check) returning a
-finite action of its parent's shape. After `_ATTEMPTS` redraws the child is a parent with its
+its siblings', and it passes the `probe` it was given: in a search, `colmo.sandbox.ProgramProbe`
+runs it for the first control steps of the task in a sandbox worker (programs never run in this
+process) and wants valid actions. After `_ATTEMPTS` redraws the child is a parent with its
 constants perturbed by a relative gaussian of `constant_sigma`, a duplicate the search skips.
 
 openai talks to any OpenAI-compatible chat-completions endpoint (vllm serve, Ollama, llama.cpp,
@@ -58,7 +59,6 @@ import logging
 import os
 import random
 import re
-import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -70,8 +70,6 @@ import openai
 
 from colmo.config import ConfigError, GeneratorConfig, MutateConfig, OpenAIConfig, VLLMConfig, one_line
 from colmo.program import ProgramError, instantiate, parametrize
-from colmo.sandbox import compile_policy
-from colmo.spec import DEFAULT_IMPORTS
 
 if TYPE_CHECKING:
     from colmo.prompt import Prompt
@@ -124,7 +122,6 @@ _VALUE_KINDS = (ast.BinOp, ast.Call, ast.Name, ast.Attribute, ast.Subscript, ast
 _OPAQUE_FIELDS = {(ast.Subscript, "slice"), (ast.Subscript, "value"), (ast.Call, "func"), (ast.Attribute, "value")}
 _OBS_SIZE = re.compile(r"obs\w*\s*(?:size is|\(size)\s*(\d+)", re.IGNORECASE)
 _ATTEMPTS = 40
-_TRACE_BUDGET = 100_000  # trace events per check run: a flipped comparison can make a loop endless
 
 
 def _is_number(node: ast.AST) -> bool:
@@ -185,40 +182,14 @@ def _statement_lists(fn: ast.FunctionDef) -> list[list[ast.stmt]]:
     ]
 
 
-def _action_shape(code: str, obs_size: int, imports: Sequence[str]) -> Optional[tuple[int, ...]]:
-    """Shape of the finite action the program returns for a zero observation, or None if it
-    fails there. Runs under the sandbox's static check and restricted builtins, with a budget
-    of trace events instead of a timer, which would need the main thread."""
-    events = itertools.count()
-
-    def trace(frame: Any, event: str, arg: Any) -> Callable:
-        if next(events) > _TRACE_BUDGET:
-            raise TimeoutError("the policy runs too long")
-        return trace
-
-    try:
-        policy = compile_policy(code, imports)["policy"]
-        previous = sys.gettrace()
-        sys.settrace(trace)
-        try:
-            with np.errstate(all="ignore"):
-                action = np.asarray(policy(np.zeros(obs_size)), dtype=float)
-        finally:
-            sys.settrace(previous)
-    except Exception:  # anything the candidate raises disqualifies it, whatever it is
-        return None
-    return action.shape if np.isfinite(action).all() else None
-
-
 class _Parent:
-    """A prompt program, parsed; `action_shape` is what its children must return."""
+    """A prompt program, parsed."""
 
     def __init__(self, code: str):
         self.code = code
         self.key = parametrize(code).key  # ProgramError unless it parses and defines `policy`
         self.tree = ast.parse(code)
         self.fn = _policy(self.tree)
-        self.action_shape: Optional[tuple[int, ...]] = None
         if not any(a.name == "numpy" for n in self.tree.body if isinstance(n, ast.Import) for a in n.names):
             self.tree.body.insert(0, ast.parse("import numpy as np").body[0])  # for the new terms' np.*
 
@@ -480,8 +451,9 @@ _CROSSOVERS = (_merge, _splice_statement, _splice_expression)
 class MutateGenerator(Generator):
     """The embedded baseline: genetic programming on the prompt's programs (module docstring)."""
 
-    def __init__(self, cfg: MutateConfig, seed: int):
+    def __init__(self, cfg: MutateConfig, seed: int, probe: Optional[Callable[[str], bool]] = None):
         self.cfg = cfg
+        self.probe = probe
         self.rng = np.random.default_rng(seed)
         operators, weights = zip(*_MUTATIONS)
         self._mutations = operators
@@ -498,34 +470,28 @@ class MutateGenerator(Generator):
             raise GeneratorError("mutate: none of the prompt's programs parses with a `def policy(obs)`")
         stated = _OBS_SIZE.search("\n".join([prompt.text, *prompt.programs]))
         pieces = _Pieces(self.rng, parents, int(stated.group(1)) if stated else None)
-        # The prompt's programs passed the sandbox's import check: their imports are allowed.
-        nodes = [n for p in parents for n in ast.walk(p.tree)]
-        imported = [a.name for n in nodes if isinstance(n, ast.Import) for a in n.names]
-        imported += [n.module for n in nodes if isinstance(n, ast.ImportFrom) and n.module]
-        imports = tuple(dict.fromkeys((*DEFAULT_IMPORTS, *(name.split(".")[0] for name in imported))))
-        for parent in parents:
-            parent.action_shape = _action_shape(parent.code, pieces.obs_size, imports)
+        # Probing a child only says something if its parents pass the probe themselves.
+        probe = self.probe if self.probe is not None and all(self.probe(p.code) for p in parents) else None
         seen = {parent.key for parent in parents}
         generations = []
         for _ in range(n):
             start = time.perf_counter()
-            code, key = self._child(parents, pieces, seen, imports)
+            code, key = self._child(parents, pieces, seen, probe)
             seen.add(key)
             generations.append(Generation(code, "mutate", seconds=time.perf_counter() - start))
         return generations
 
     def _child(
-        self, parents: list[_Parent], pieces: _Pieces, seen: set[str], imports: Sequence[str]
+        self, parents: list[_Parent], pieces: _Pieces, seen: set[str], probe: Optional[Callable[[str], bool]]
     ) -> tuple[str, str]:
-        """A child's code and structure key."""
+        """A child's code and structure key: a new structure that passes the probe."""
         for _ in range(_ATTEMPTS):
             parent, tree = self._offspring(parents, pieces)
             code = ast.unparse(tree) + "\n"
             key = parametrize(code).key
             if key in seen:
                 continue
-            # A parent that fails on a zero observation gives nothing to compare with.
-            if parent.action_shape is None or _action_shape(code, pieces.obs_size, imports) == parent.action_shape:
+            if probe is None or probe(code):
                 return code, key
         logger.debug("mutate: no new working structure in %d attempts; perturbing constants", _ATTEMPTS)
         parent = self._choose(parents, 1)[0]
@@ -756,8 +722,12 @@ GENERATORS: dict[str, Callable[[Any, int], Generator]] = {
 }
 
 
-def make_generator(cfg: GeneratorConfig, seed: int) -> Generator:
-    """The generator `cfg.name` names, configured by `cfg` (the `llm` config group)."""
+def make_generator(cfg: GeneratorConfig, seed: int, probe: Optional[Callable[[str], bool]] = None) -> Generator:
+    """The generator `cfg.name` names, configured by `cfg` (the `llm` config group). `probe(code)`
+    says whether a program runs on the task (see `colmo.sandbox.ProgramProbe`); the embedded
+    generator uses it to offer only working children."""
     if cfg.name not in GENERATORS:
         raise ConfigError(f"llm.name must be one of {', '.join(GENERATORS)}; got {cfg.name!r}")
+    if cfg.name == "mutate":
+        return MutateGenerator(cfg, seed, probe)
     return GENERATORS[cfg.name](cfg, seed)

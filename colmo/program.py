@@ -86,6 +86,13 @@ class ParametricProgram:
 
 def parametrize(code: str, function_name: str = "policy") -> ParametricProgram:
     """Split `code` into a skeleton over `params` and the values of its tunable literals."""
+    try:
+        return _parametrize(code, function_name)
+    except (RecursionError, MemoryError):  # the parser and AST visitors recurse per nesting level
+        raise ProgramError("the program is nested too deeply to parse") from None
+
+
+def _parametrize(code: str, function_name: str) -> ParametricProgram:
     tree = _parse(code)
     if not any(isinstance(s, (ast.FunctionDef, ast.AsyncFunctionDef)) and s.name == function_name for s in tree.body):
         raise ProgramError(f"no function named '{function_name}'")

@@ -64,6 +64,7 @@ import builtins
 import concurrent.futures
 import contextvars
 import ctypes
+import dataclasses
 import gc
 import importlib
 import json
@@ -82,7 +83,7 @@ import types
 from collections import OrderedDict
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
-from typing import TYPE_CHECKING, Any, Callable, Collection, Protocol, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Collection, Optional, Protocol, Sequence
 
 from colmo.task import Evaluation
 
@@ -340,6 +341,7 @@ class EvalRequest:
     skeleton: str
     params: tuple[float, ...]
     allowed_imports: tuple[str, ...]
+    steps: Optional[int] = None  # episodes cut to this many control steps (a probe); None: whole
 
 
 class Executor(Protocol):
@@ -371,6 +373,29 @@ def batch_evaluator(executor: Executor, spec: "Spec", env: dict[str, Any], seeds
 
 
 # -- the worker process -----------------------------------------------------------------------
+
+class ProgramProbe:
+    """Does a program run on its task? It runs the first `steps` control steps of one episode
+    in a sandbox worker of its own (so probes never wait behind evaluations), and passes if it
+    returns valid actions there. Generators use it to offer only programs that work."""
+
+    def __init__(self, spec: "Spec", env: dict[str, Any], seed: int, timeout_s: float, memory_mb: int, steps: int = 20):
+        self.pool = WorkerPool(1, timeout_s, memory_mb)
+        self.request = EvalRequest(str(spec.path), tuple(sorted(env.items())), (seed,), "", (), spec.allowed_imports, steps)
+
+    def __call__(self, code: str) -> bool:
+        from colmo.program import ProgramError, parametrize
+
+        try:
+            program = parametrize(code)
+        except ProgramError:
+            return False
+        request = dataclasses.replace(self.request, skeleton=program.skeleton, params=program.values)
+        return self.pool.evaluate([request])[0].failure is None
+
+    def close(self) -> None:
+        self.pool.close()
+
 
 def _describe(error: BaseException, where: str = "") -> str:
     if isinstance(error, MemoryError):
@@ -425,7 +450,7 @@ class _WorkerState:
                 return Evaluation(failure=str(error))
             except BaseException as error:  # module-level code of an untrusted program
                 return Evaluation(failure=_describe(error, " (at import)"))
-            return evaluate_policy(env, namespace["policy"], list(request.seeds))
+            return evaluate_policy(env, namespace["policy"], list(request.seeds), request.steps)
         except BaseException as error:  # SystemExit and friends raised by the policy
             return Evaluation(failure=_describe(error))
         finally:

@@ -30,7 +30,7 @@ from colmo.optimize import ProgramResult, optimize_program
 from colmo.program import ParametricProgram, ProgramError, parametrize
 from colmo.prompt import Prompt, build_prompt
 from colmo.executor import make_executor
-from colmo.sandbox import ForbiddenProgram, batch_evaluator, check_program
+from colmo.sandbox import ForbiddenProgram, ProgramProbe, batch_evaluator, check_program
 from colmo.spec import Spec, load_task_spec
 from colmo.store import STORE_FILE, ProgramStore, SampleRecord, open_for_resume
 from colmo.task import episode_seeds
@@ -38,6 +38,7 @@ from colmo.task import episode_seeds
 log = logging.getLogger("colmo.search")
 
 STARTER_SAMPLE = -1
+_PROBE_TIMEOUT_S = 30.0
 SUMMARY_FILE = "summary.json"
 BEST_POLICY_FILE = "best_policy.py"
 
@@ -122,6 +123,7 @@ class Search:
         in_flight_programs = cfg.llm.batch_size * cfg.search.queue_size
         self.program_threads = concurrent.futures.ThreadPoolExecutor(in_flight_programs, thread_name_prefix="colmo-program")
         self.generator = None
+        self.probe: ProgramProbe | None = None
         self.start = time.perf_counter()
         self.database: ProgramDatabase | None = None
 
@@ -174,7 +176,11 @@ class Search:
             self.database = ProgramDatabase(self.cfg.database, starter, self.cfg.seed)
             self.best_so_far = [[0, starter.score]]
             self._replay()
-            self.generator = make_generator(self.cfg.llm, self.cfg.seed)
+            self.probe = ProgramProbe(
+                self.spec, self.cfg.task.env, self.seeds[0], min(self.cfg.executor.timeout_s, _PROBE_TIMEOUT_S),
+                self.cfg.executor.memory_mb,
+            ) if self.cfg.llm.name == "mutate" else None
+            self.generator = make_generator(self.cfg.llm, self.cfg.seed, self.probe)
             self._loop()
         except KeyboardInterrupt:
             self.stop_reason = "interrupted"
@@ -186,6 +192,8 @@ class Search:
             self.program_threads.shutdown(wait=False, cancel_futures=True)
             if self.generator is not None:
                 self.generator.close()
+            if self.probe is not None:
+                self.probe.close()
         summary = self.summary()
         write_outputs(summary, self.run_dir)
         for observer in self.observers:

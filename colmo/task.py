@@ -157,7 +157,7 @@ def as_action(raw: object, action_size: int) -> np.ndarray:
     return action
 
 
-def rollout(env: Environment, policy: Policy, seed: int) -> float:
+def rollout(env: Environment, policy: Policy, seed: int, steps: int | None = None) -> float:
     """Return of one episode; raises `PolicyFailure` with the reason if anything goes wrong."""
     # Policies may draw from np.random (the paper's quadruped policy adds noise): seeding it per
     # episode keeps the objective a deterministic function of the parameters.
@@ -165,7 +165,7 @@ def rollout(env: Environment, policy: Policy, seed: int) -> float:
     obs = env.reset(seed)
     total = 0.0
     size = env.action_size
-    for step in range(env.horizon):
+    for step in range(steps or env.horizon):
         try:
             # A copy: an environment may return a view of its simulation state (`self.data.qpos`),
             # which a policy writing to its `obs` would otherwise change.
@@ -184,12 +184,12 @@ def rollout(env: Environment, policy: Policy, seed: int) -> float:
     return total
 
 
-def evaluate_policy(env: Environment, policy: Policy, seeds: list[int]) -> Evaluation:
+def evaluate_policy(env: Environment, policy: Policy, seeds: list[int], steps: int | None = None) -> Evaluation:
     """Mean-return evaluation over `seeds`; a failure in any episode fails the whole evaluation."""
     returns = []
     for seed in seeds:
         try:
-            returns.append(rollout(env, policy, seed))
+            returns.append(rollout(env, policy, seed, steps))
         except PolicyFailure as failure:
             return Evaluation(tuple(returns), str(failure))
         except RecursionError:

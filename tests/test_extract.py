@@ -319,3 +319,8 @@ def test_function_name():
 
 def test_extraction_error_is_a_value_error():
     assert issubclass(ExtractionError, ValueError)
+
+
+def test_deeply_nested_answer_is_an_extraction_error_not_a_crash():
+    with pytest.raises(ExtractionError, match="nested too deeply"):
+        extract_policy("def policy(obs):\n    return " + "-" * 100000 + "1\n")

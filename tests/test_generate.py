@@ -4,12 +4,10 @@ speaking the chat-completions protocol, and the vLLM wiring through a fake `vllm
 from __future__ import annotations
 
 import ast
-import json
 import logging
 import re
 import socket
 import sys
-import threading
 import time
 import types
 
@@ -21,6 +19,7 @@ from colmo.config import ConfigError, GeneratorConfig, MutateConfig, OpenAIConfi
 from colmo.generate import GENERATORS, Generation, GeneratorError, MutateGenerator, make_generator
 from colmo.program import parametrize
 from colmo.prompt import Prompt
+from colmo.sandbox import EvalRequest, ProgramProbe, WorkerPool
 from colmo.spec import load_spec
 
 from conftest import EXAMPLES, FakeOpenAIServer
@@ -32,6 +31,20 @@ MESSAGES = [{"role": "system", "content": "You write policies."}, {"role": "user
 
 def make_prompt(*programs: str, text: str = "") -> Prompt:
     return Prompt(text=text, messages=MESSAGES, programs=list(programs), island=0, parent_keys=[])
+
+
+@pytest.fixture(scope="module")
+def pendulum_probe():
+    probe = ProgramProbe(load_spec("pendulum.py"), {}, seed=0, timeout_s=3, memory_mb=1024)
+    yield probe
+    probe.close()
+
+
+@pytest.fixture(scope="module")
+def cheetah_probe():
+    probe = ProgramProbe(load_spec("cheetah.py"), {}, seed=0, timeout_s=3, memory_mb=1024)
+    yield probe
+    probe.close()
 
 
 def run_on_zeros(code: str, obs_size: int) -> np.ndarray:
@@ -47,27 +60,34 @@ def indices_read(code: str) -> set[int]:
 
 # ------------------------------------------------------------------------------------- mutate
 
-def test_mutate_children_parse_run_and_differ_from_their_parents():
+def test_mutate_children_parse_run_and_differ_from_their_parents(pendulum_probe):
     prompt = make_prompt(STARTER, PAPER_PENDULUM)
-    children = MutateGenerator(MutateConfig(), seed=0).generate(prompt, 200)
+    children = MutateGenerator(MutateConfig(), seed=0, probe=pendulum_probe).generate(prompt, 200)
 
     assert len(children) == 200 and all(c.generator == "mutate" for c in children)
-    runs = 0
     for child in children:
         fn = next(n for n in ast.parse(child.text).body if isinstance(n, ast.FunctionDef) and n.name == "policy")
         assert [a.arg for a in fn.args.args] == ["obs"]
         assert any(isinstance(n, ast.Return) and n.value is not None for n in ast.walk(fn))
-        try:
-            action = run_on_zeros(child.text, 3)
-        except Exception:
-            continue
-        runs += action.shape == () and bool(np.isfinite(action))
-    assert runs == 200  # measured: every child runs on zeros(3) and returns a finite scalar
+    # Whole episodes in the sandbox, on an episode seed the probe never saw.
+    spec = load_spec("pendulum.py")
+    with WorkerPool(1, timeout_s=30, memory_mb=1024) as pool:
+        requests = [
+            EvalRequest(str(spec.path), (), (12345,), p.skeleton, p.values, spec.allowed_imports)
+            for p in map(parametrize, (c.text for c in children))
+        ]
+        failures = [e.failure for e in pool.evaluate(requests) if e.failure]
+    assert len(failures) <= 2, failures  # measured: 0 of 200
 
     keys = [parametrize(c.text).key for c in children]
     parents = {parametrize(p).key for p in prompt.programs}
     assert len(set(keys)) == 200  # no two children share a structure ...
     assert not set(keys) & parents  # ... nor one with a parent
+
+
+def test_without_a_probe_children_are_only_parsed():
+    children = MutateGenerator(MutateConfig(), seed=0).generate(make_prompt(STARTER, PAPER_PENDULUM), 50)
+    assert len({parametrize(c.text).key for c in children}) == 50
 
 
 def test_mutate_is_deterministic_given_the_seed():
@@ -98,15 +118,15 @@ def test_new_terms_read_observation_entries_below_the_stated_size():
     assert set().union(*(indices_read(g.text) for g in children)) == {0, 2}
 
 
-def test_children_keep_the_action_shape_of_array_policies():
+def test_children_keep_the_action_shape_of_array_policies(cheetah_probe):
     cheetah = (EXAMPLES / "paper_cheetah.py").read_text()
-    children = MutateGenerator(MutateConfig(), seed=0).generate(make_prompt(cheetah), 30)
+    children = MutateGenerator(MutateConfig(), seed=0, probe=cheetah_probe).generate(make_prompt(cheetah), 30)
     assert all(run_on_zeros(g.text, 17).shape == (6,) for g in children)
     assert len({parametrize(g.text).key for g in children}) == 30
 
 
-def test_children_of_a_program_without_numpy_import_it():
-    children = MutateGenerator(MutateConfig(), seed=0).generate(make_prompt("def policy(obs):\n    return 0.0\n", text="obs size is 3"), 20)
+def test_children_of_a_program_without_numpy_import_it(pendulum_probe):
+    children = MutateGenerator(MutateConfig(), seed=0, probe=pendulum_probe).generate(make_prompt("def policy(obs):\n    return 0.0\n", text="obs size is 3"), 20)
     assert any("np." in g.text for g in children)
     assert all(run_on_zeros(g.text, 3).shape == () for g in children)
 
@@ -127,12 +147,15 @@ def test_mutate_skips_programs_it_cannot_parse():
         MutateGenerator(MutateConfig(), seed=0).generate(make_prompt("def policy(obs) return", "x = 1"), 1)
 
 
-def test_the_zero_observation_check_stops_endless_loops():
+def test_the_probe_passes_only_programs_that_run_on_the_task(pendulum_probe):
     start = time.perf_counter()
-    assert generate._action_shape("def policy(obs):\n    while True:\n        pass\n", 3, ("numpy",)) is None
-    assert time.perf_counter() - start < 5
-    assert generate._action_shape("def policy(obs):\n    return 1.0 / obs[0]\n", 3, ("numpy",)) is None  # inf
-    assert generate._action_shape("def policy(obs):\n    return obs[:2]\n", 3, ("numpy",)) == (2,)
+    assert not pendulum_probe("def policy(obs):\n    while True:\n        pass\n")  # its worker is replaced
+    assert time.perf_counter() - start < 10
+    assert not pendulum_probe("def policy(obs):\n    return obs[:2]\n")  # two actions for one actuator
+    assert not pendulum_probe("def policy(obs):\n    return float('nan')\n")
+    assert not pendulum_probe("import os\ndef policy(obs):\n    return 0.0\n")
+    assert not pendulum_probe("def policy(obs) return")
+    assert pendulum_probe(PAPER_PENDULUM)
 
 
 # ---------------------------------------------------------------------- openai: a real server

@@ -385,7 +385,7 @@ class HostileGenerator(Generator):
 
 
 def test_a_search_flooded_with_hostile_programs_keeps_running_and_improving(tmp_path, canary, monkeypatch):
-    monkeypatch.setattr(colmo.search, "make_generator", lambda cfg, seed: HostileGenerator(MutateGenerator(cfg, seed), seed, canary))
+    monkeypatch.setattr(colmo.search, "make_generator", lambda cfg, seed, probe: HostileGenerator(MutateGenerator(cfg, seed, probe), seed, canary))
     tmp = tmp_path / "tmp"
     tmp.mkdir()
     monkeypatch.setattr(tempfile, "tempdir", str(tmp))

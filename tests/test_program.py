@@ -502,3 +502,8 @@ def test_count_lines_ignores_wrapping_comments_and_docstrings():
     assert count_lines(code) == 3
     with pytest.raises(ProgramError):
         count_lines("def policy(obs:\n")
+
+
+def test_deeply_nested_program_is_a_program_error_not_a_crash():
+    with pytest.raises(ProgramError, match="nested too deeply"):
+        parametrize("def policy(obs):\n    return " + "-" * 100000 + "1\n")

@@ -107,7 +107,10 @@ def test_sigint_stops_gracefully_and_says_how_to_resume(tmp_path):
     assert process.returncode == 130
     assert "resume with: python -m colmo task=pendulum resume=" in stderr
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
-    assert summary["stop_reason"] == "interrupted" and summary["samples"] >= 4
+    # The summary counts samples integrated in order; the store also holds later ones that
+    # finished before the interrupt, and a resume picks those up.
+    assert summary["stop_reason"] == "interrupted"
+    assert 1 <= summary["samples"] <= len(store_rows(tmp_path / "run")) - 1
     assert (tmp_path / "run" / "best_policy.py").is_file()
     assert "Traceback" not in stderr
 
