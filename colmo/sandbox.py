@@ -119,6 +119,7 @@ _IDENTIFIER_FIELDS = {
     ast.ExceptHandler: "name", ast.MatchAs: "name", ast.MatchStar: "name", ast.MatchMapping: "rest",
 }
 _MAX_REASON_CHARS = 500
+_DEATH_RETRIES = 1
 _MAX_REPLY_BYTES = 1 << 20
 
 
@@ -671,20 +672,26 @@ class WorkerPool:
             worker.kill()
 
     def _run(self, index: int, request: EvalRequest) -> Evaluation:
-        worker = self.workers[index]
-        if worker is None or worker.process.poll() is not None:
-            worker = self.workers[index] = self._start_worker()
-        try:
-            worker.connection.send(request)
-            if worker.connection.poll(self.timeout_s):
-                return _decode(worker.connection.recv_bytes(_MAX_REPLY_BYTES))
-            reason = f"timeout: the evaluation took longer than {self.timeout_s:g} s"
-        except (EOFError, OSError):
-            reason = worker.exit_reason()
-        except (ValueError, KeyError, TypeError):
-            reason = "crash: malformed reply from the worker"
-        worker.kill()
-        self.workers[index] = None
+        # A worker that dies mid-evaluation may have been killed from outside (the OOM killer, an
+        # operator): the request gets one more try on a fresh worker before it counts as failed.
+        for _ in range(_DEATH_RETRIES + 1):
+            worker = self.workers[index]
+            if worker is None or worker.process.poll() is not None:
+                worker = self.workers[index] = self._start_worker()
+            died = False
+            try:
+                worker.connection.send(request)
+                if worker.connection.poll(self.timeout_s):
+                    return _decode(worker.connection.recv_bytes(_MAX_REPLY_BYTES))
+                reason = f"timeout: the evaluation took longer than {self.timeout_s:g} s"
+            except (EOFError, OSError):
+                reason, died = worker.exit_reason(), True
+            except (ValueError, KeyError, TypeError):
+                reason = "crash: malformed reply from the worker"
+            worker.kill()
+            self.workers[index] = None
+            if not died or self.closed:
+                break
         return Evaluation(failure=reason)
 
     def close(self, cancel: bool = False) -> None:
