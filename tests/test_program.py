@@ -4,128 +4,12 @@ import numpy as np
 import pytest
 
 from colmo.program import ParametricProgram, ProgramError, count_lines, instantiate, parametrize
+from conftest import EXAMPLES
 
-# The five policies of the paper's Fig. 5, as printed (missing colon of ball-in-cup fixed).
-PENDULUM = '''
-def policy(obs):
-  """obs size is 3. return shape is ()"""
-  x1 = np.arctan2(-obs[1], obs[0])
-  # Adjust action
-  if np.abs(x1) > np.pi / 6.512:
-    action = np.sign(obs[2])
-  else:
-    action = 9.437*np.sin(x1) - 2.746 * obs[2]
-
-  return action
-'''
-
-CHEETAH = '''
-def policy(obs):
-  """obs size is 17: position (8), velocity (9).
-  return shape is (6,)."""
-
-  pos = obs[:3]
-  vel = obs[3:6]
-  ang_vel = obs[6:9]
-
-  # Adjust forward control gain
-  action = np.zeros(6)
-  action[0] = -12.241 * vel[0]
-
-  action[1] = -0.603 * ang_vel[0]  # Hip angle
-  action[2] = 11.351 * ang_vel[1]  # Knee angle
-  action[3] = -8.106 * ang_vel[2]  # Ankle angle
-
-  # Introduce a new control term for balance
-  action[4] = -12.268 * ang_vel[1]
-
-  return action
-'''
-
-QUADRUPED = '''
-def policy(obs):
-  torso_upright = obs[47]
-  imu = obs[48:54]
-
-  if torso_upright < 1.131 or any(abs(x) > 0.529 for x in imu):
-    # Adjust actions for better stability
-    actions = np.array([-0.4, -0.499, 1.321, -1.483, 0.774, -0.281, 1.049, -0.836, -0.195, 0.846, 1.898, 2.066])
-  elif abs(torso_upright) < 0.825:
-    # Adjust actions for a balanced stance
-    actions = np.array([0.2, -0.493, -0.287, 0.861, -2.279, 0.03, -1.584, -0.079, 0.427, 0.233, 0.801, 0.163])
-  else:
-    actions = np.array([0.0, -0.173, -0.024, 2.506, -0.82, 0.029, -1.302, 0.009, -1.243, 0.057, -1.264, -1.961])
-
-  if obs[-1] < -0.275: # Performance adjustment
-    actions *= -1.29
-  elif obs[-1] > 1.442:
-    actions *= -1.893
-
-  # Minimal noise addition for fine-tuning
-  actions += np.random.normal(scale=0.04, size=12)
-
-  return actions
-'''
-
-BALL_IN_CUP = '''
-def policy(obs):
-  """obs size is 8. return shape is (2,)."""
-
-  ball_pos = obs[:3]
-  cup_pos = obs[3:]
-  action = np.zeros((2,))
-
-  # Further refine horizontal movement
-  if abs(ball_pos[0] - cup_pos[0]) > -12.071:
-    action[0] += (cup_pos[0] - ball_pos[0]) * -5.66
-
-  # Fine-tune vertical position correction
-  if abs(ball_pos[2] - cup_pos[2]) > -7.763:
-    action[1] += (cup_pos[2] - ball_pos[2]) * 1.023
-
-  # Add slight bias to vertical movement
-  action[1] += 0.531
-
-  return action
-'''
-
-UNITREE_A1 = '''
-def policy(obs):
-  """obs size is 27: position and angles (19), velocities (8). return shape is (12,)"""
-
-  joint_angles = obs[0:12]
-  joint_velocities = obs[12:24]
-  body_velocity = obs[24:27]
-
-  target_joint_angles = joint_angles.copy()
-
-  # Adjust the hip joints
-  target_joint_angles[0::3] += -27.697 * np.sign(body_velocity[0])
-  target_joint_angles[1::3] += -6.726 * np.sign(body_velocity[0])
-
-  # Adjust the knee joints
-  target_joint_angles[1::3] += 6.09 * joint_velocities[1::3]
-
-  # Adjusting the shoulder joints
-  target_joint_angles[2::3] += -14.423
-
-  # Add a simple spring-like mechanism
-  balance_factor = 17.69
-  target_joint_angles[0::3] += balance_factor * (body_velocity[1] + body_velocity[2])
-  target_joint_angles[1::3] += balance_factor * (body_velocity[1] - body_velocity[2])
-
-  # Add additional balancing adjustments
-  if body_velocity[2] < -32.662:
-    target_joint_angles[0::3] += 10.462
-    target_joint_angles[1::3] += -22.429
-
-  # Adjustments to ensure proper leg movement
-  target_joint_angles[0::3] += 14.31
-  target_joint_angles[1::3] -= -49.337
-
-  # Return the target joint angles
-  return target_joint_angles
-'''
+# The five policies of the paper's Fig. 5 (examples/paper_*.py: missing colon of ball-in-cup fixed).
+PENDULUM, CHEETAH, QUADRUPED, BALL_IN_CUP, UNITREE_A1 = (
+    (EXAMPLES / f"paper_{name}.py").read_text() for name in ("pendulum", "cheetah", "quadruped", "ball_in_cup", "a1")
+)
 
 QUADRUPED_ARRAYS = (
     (-0.4, -0.499, 1.321, -1.483, 0.774, -0.281, 1.049, -0.836, -0.195, 0.846, 1.898, 2.066),
@@ -204,6 +88,7 @@ def test_paper_policy_reparametrizes_to_itself(task):
 def test_pendulum_renders_like_the_paper():
     program = parametrize(PENDULUM)
     assert instantiate(program.skeleton, program.values, digits=4) == (
+        "import numpy as np\n\n"
         "def policy(obs):\n"
         "    x1 = np.arctan2(-obs[1], obs[0])\n"
         "    if np.abs(x1) > np.pi / 6.512:\n"
@@ -217,6 +102,7 @@ def test_pendulum_renders_like_the_paper():
 def test_cheetah_renders_four_significant_digits():
     program = parametrize(CHEETAH)
     assert program.skeleton == (
+        "import numpy as np\n\n"
         "def policy(obs):\n"
         "    pos = obs[:3]\n"
         "    vel = obs[3:6]\n"
@@ -231,6 +117,7 @@ def test_cheetah_renders_four_significant_digits():
     )
     rendered = instantiate(program.skeleton, program.values, digits=4)
     assert rendered == (
+        "import numpy as np\n\n"
         "def policy(obs):\n"
         "    pos = obs[:3]\n"
         "    vel = obs[3:6]\n"
@@ -265,12 +152,14 @@ def test_other_paper_policies_render_readably():
 
 def test_paper_line_counts():
     counts = {task: count_lines(code) for task, (code, _, _) in PAPER.items()}
-    assert counts == {"pendulum": 7, "cheetah": 11, "quadruped": 15, "ball_in_cup": 10, "unitree_a1": 18}
+    # The policy lines of Fig. 5, plus the example files' `import numpy as np`.
+    assert counts == {"pendulum": 8, "cheetah": 12, "quadruped": 16, "ball_in_cup": 11, "unitree_a1": 19}
 
 
 # --- structure key -------------------------------------------------------------------------
 
 PENDULUM_RESTYLED = '''
+import numpy as np  # the same import, restyled comment
 def policy(obs):
     """A different docstring, 42 and all."""
     x1 = np.arctan2(-obs[1],
