@@ -285,6 +285,7 @@ class Search:
 
     @staticmethod
     def _settle(record: SampleRecord, program: ParametricProgram, result: ProgramResult) -> None:
+        record.key, record.skeleton, record.initial_params = program.key, program.skeleton, list(program.values)
         record.status = "failed" if result.failure else "evaluated"
         record.code, record.params = result.code, list(result.params)
         record.initial_score = result.initial.score if math.isfinite(result.initial.score) else None

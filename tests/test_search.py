@@ -127,3 +127,11 @@ def test_bad_resume_directories_exit_2(tmp_path, make_dir, overrides, message):
     assert result.returncode == 2, result.stderr
     assert result.stderr.strip().splitlines() == [f"colmo: error: {result.stderr.split('colmo: error: ')[1].strip()}"]
     assert message in result.stderr
+
+
+def test_children_of_the_starter_name_it_as_their_parent(tmp_path):
+    Search(compose("search", "search.max_samples=4", *TINY), tmp_path).run()
+    with sqlite3.connect(tmp_path / "programs.db") as connection:
+        starter_key = connection.execute("SELECT key FROM samples WHERE sample = -1").fetchone()[0]
+        parents = [json.loads(p) for (p,) in connection.execute("SELECT parent_keys FROM samples WHERE sample >= 0")]
+    assert starter_key and all(p == [starter_key] for p in parents)
