@@ -14,7 +14,7 @@ import types
 import numpy as np
 import pytest
 
-from colmo import generate
+from colmo.generate import mutate
 from colmo.config import ConfigError, GeneratorConfig, MutateConfig, OpenAIConfig, VLLMConfig
 from colmo.generate import GENERATORS, Generation, GeneratorError, MutateGenerator, make_generator
 from colmo.program import parametrize
@@ -132,7 +132,7 @@ def test_children_of_a_program_without_numpy_import_it(pendulum_probe):
 
 
 def test_without_a_new_structure_a_child_is_its_parent_with_perturbed_constants(monkeypatch):
-    monkeypatch.setattr(generate, "_ATTEMPTS", 0)
+    monkeypatch.setattr(mutate, "_ATTEMPTS", 0)
     [child] = MutateGenerator(MutateConfig(), seed=0).generate(make_prompt(PAPER_PENDULUM), 1)
     parent = parametrize(PAPER_PENDULUM)
     program = parametrize(child.text)

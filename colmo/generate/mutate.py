@@ -1,9 +1,4 @@
-"""Producing candidate programs from a prompt: the embedded mutation baseline, OpenAI-compatible
-servers, in-process vLLM, behind one interface and a registry.
-
-A `Generator` turns one `Prompt` into `n` raw texts (`Generation`s, `n` = `llm.batch_size`);
-pulling the policy out of a model's answer is the search loop's job (`colmo.extract`).
-`make_generator(cfg.llm, seed)` builds the one named by `llm.name` from `GENERATORS`.
+"""The embedded baseline generator, `llm=mutate` (no model, no GPU, no network).
 
 mutate (the default: no model, no GPU, no network) is genetic programming on the AST of the
 prompt's programs: the paper's view of generation as a genetic operator (Sec. IV-B) made
@@ -34,85 +29,22 @@ its siblings', and it passes the `probe` it was given: in a search, `colmo.sandb
 runs it for the first control steps of the task in a sandbox worker (programs never run in this
 process) and wants valid actions. After `_ATTEMPTS` redraws the child is a parent with its
 constants perturbed by a relative gaussian of `constant_sigma`, a duplicate the search skips.
-
-openai talks to any OpenAI-compatible chat-completions endpoint (vllm serve, Ollama, llama.cpp,
-OpenAI) with the official client. It asks for `n` choices in one request when `use_n`; a
-server that returns fewer is asked one completion per request from then on, in parallel.
-Retries are its own (visible in the log, configurable): connection errors, timeouts, HTTP 408,
-409, 429, 5xx and unusable answers are retried with exponential backoff and full jitter, up to
-`max_retries` times per request; a request that runs out of retries is dropped, so a batch can
-come back short. Requests go round robin over `base_url`, skipping a server for
-`max_backoff_s` after it fails. `max_consecutive_failures` failed attempts in a row, over all
-servers, or any other HTTP error (a wrong model name, a bad key), raise `GeneratorError`.
-
-vllm runs `vllm.LLM` in this process (`pip install 'colmo[vllm]'`) and samples the batch as the
-`n` outputs of one request through the model's chat template.
 """
 
 from __future__ import annotations
 
-import abc
 import ast
 import copy
-import itertools
-import logging
-import os
-import random
 import re
-import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Optional, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
-import openai
 
-from colmo.config import ConfigError, GeneratorConfig, MutateConfig, OpenAIConfig, VLLMConfig, one_line
+from colmo.config import MutateConfig
+from colmo.generate.base import Generation, Generator, GeneratorError, logger
 from colmo.program import ProgramError, instantiate, parametrize
-
-if TYPE_CHECKING:
-    from colmo.prompt import Prompt
-
-logger = logging.getLogger("colmo.generate")
-
-
-@dataclass(frozen=True)
-class Generation:
-    text: str  # raw output: code from mutate, a model's whole answer otherwise
-    generator: str  # "mutate", "openai:<model>@<url>", "vllm:<model>"
-    prompt_tokens: int = 0
-    completion_tokens: int = 0
-    seconds: float = 0.0
-
-
-class GeneratorError(RuntimeError):
-    """The generator cannot go on (no server answers, a request is refused, a library is
-    missing); the message is one line."""
-
-
-class Generator(abc.ABC):
-    @abc.abstractmethod
-    def generate(self, prompt: Prompt, n: int) -> list[Generation]:
-        """Up to `n` candidate programs for `prompt`."""
-
-    def close(self) -> None:
-        """Release connections, threads or GPU memory."""
-
-
-def _batch(
-    texts: Sequence[str], generator: str, prompt_tokens: int, completion_tokens: Sequence[int], seconds: float
-) -> list[Generation]:
-    """The generations of one request. Its prompt is counted on the first only and its time is
-    split evenly, so that sums over generations are the request's totals."""
-    return [
-        Generation(text, generator, prompt_tokens if i == 0 else 0, completion, seconds / len(texts))
-        for i, (text, completion) in enumerate(zip(texts, completion_tokens))
-    ]
-
-
-# --------------------------------------------------------------------------------------------
-# mutate: genetic operators on the program AST
+from colmo.prompt import Prompt
 
 _FUNCTIONS = ("sin", "cos", "tanh", "sign", "abs")
 _ARITHMETIC = (ast.Add, ast.Sub, ast.Mult, ast.Div)
@@ -526,208 +458,3 @@ class MutateGenerator(Generator):
         program = parametrize(parent.code)
         values = np.array(program.values) * (1.0 + self.cfg.constant_sigma * self.rng.standard_normal(program.n_params))
         return instantiate(program.skeleton, values, digits=4) + "\n"
-
-
-# --------------------------------------------------------------------------------------------
-# openai: any OpenAI-compatible chat-completions server
-
-_RETRYABLE_STATUS = frozenset({408, 409, 429})
-
-
-class _UnusableAnswer(ValueError):
-    """A 200 answer with no completion text in it."""
-
-
-def _texts(response: Any) -> list[str]:
-    """The non-empty completion texts of an answer; `_UnusableAnswer` if there are none (servers
-    and proxies can answer 200 with HTML, an error object or empty choices)."""
-    choices = getattr(response, "choices", None) or []
-    texts = [getattr(getattr(choice, "message", None), "content", None) for choice in choices]
-    texts = [text for text in texts if isinstance(text, str) and text.strip()]
-    if not texts:
-        raise _UnusableAnswer(f"no completion text in the answer ({len(choices)} choices)")
-    return texts
-
-
-def _split(total: int, parts: int) -> list[int]:
-    return [total // parts + (i < total % parts) for i in range(parts)]
-
-
-def _describe(error: BaseException) -> str:
-    cause = f" ({one_line(error.__cause__)})" if error.__cause__ else ""
-    return f"{type(error).__name__}: {one_line(error)}{cause}"
-
-
-class _Server:
-    def __init__(self, url: str, client: openai.OpenAI):
-        self.url = url
-        self.client = client
-        self.failed_at = -float("inf")
-
-
-class OpenAIGenerator(Generator):
-    """Chat completions from OpenAI-compatible servers, with our own retries and failover."""
-
-    def __init__(self, cfg: OpenAIConfig, seed: int):
-        self.cfg = cfg
-        api_key = os.environ.get(cfg.api_key_env) or "EMPTY"  # local servers want no key, the client wants one
-        self._servers = [
-            _Server(url, openai.OpenAI(base_url=url, api_key=api_key, timeout=cfg.timeout_s, max_retries=0))
-            for url in cfg.base_url
-        ]
-        self._turn = itertools.count()
-        self._lock = threading.Lock()
-        self._failures = 0  # consecutive failed attempts, all servers together
-        self._use_n = cfg.use_n
-        self._seeds = random.Random(seed)
-        self._pool = ThreadPoolExecutor(max_workers=cfg.batch_size, thread_name_prefix="colmo-openai")
-
-    def generate(self, prompt: Prompt, n: int) -> list[Generation]:
-        generations = self._complete(prompt.messages, n, self._seeds.randrange(2**31)) if self._use_n and n > 1 else []
-        seeds = [self._seeds.randrange(2**31) for _ in range(n - len(generations))]
-        for batch in self._pool.map(lambda seed: self._complete(prompt.messages, 1, seed), seeds):
-            generations += batch
-        return generations
-
-    def close(self) -> None:
-        self._pool.shutdown(wait=False, cancel_futures=True)
-        for server in self._servers:
-            server.client.close()
-
-    def _complete(self, messages: list[dict[str, str]], n: int, seed: int) -> list[Generation]:
-        """One request, retried; its generations, or none once its retries are spent."""
-        cfg = self.cfg
-        for attempt in range(cfg.max_retries + 1):
-            server = self._pick_server()
-            start = time.perf_counter()
-            try:
-                response = server.client.chat.completions.create(
-                    model=cfg.model, messages=messages, temperature=cfg.temperature, top_p=cfg.top_p,
-                    max_tokens=cfg.max_tokens, seed=seed, **({"n": n} if n > 1 else {}),
-                )
-                texts = _texts(response)
-            except openai.APIStatusError as error:
-                if error.status_code not in _RETRYABLE_STATUS and error.status_code < 500:
-                    message = f"{server.url} refused the request: HTTP {error.status_code}: {one_line(error)}"
-                    raise GeneratorError(message) from None
-                reason = self._failed(server, error)
-            except (openai.APIConnectionError, openai.APIResponseValidationError, ValueError) as error:
-                # ValueError: a body that is not JSON, or `_UnusableAnswer`.
-                reason = self._failed(server, error)
-            else:
-                return self._succeeded(server, response, texts, n, time.perf_counter() - start)
-            if attempt < cfg.max_retries:
-                # Full jitter: requests that failed together do not all come back together.
-                delay = random.uniform(0.0, min(cfg.max_backoff_s, cfg.backoff_s * 2**attempt))
-                logger.warning(
-                    "openai: %s failed (%s); retry %d/%d in %.3fs", server.url, reason, attempt + 1, cfg.max_retries, delay
-                )
-                time.sleep(delay)
-        logger.warning("openai: dropping a request after %d attempts; the last failed with %s", cfg.max_retries + 1, reason)
-        return []
-
-    def _pick_server(self) -> _Server:
-        """Round robin over the servers that have not failed in the last `max_backoff_s`; if all
-        have, the one that failed longest ago."""
-        with self._lock:
-            now = time.monotonic()
-            for _ in range(len(self._servers)):
-                server = self._servers[next(self._turn) % len(self._servers)]
-                if now - server.failed_at >= self.cfg.max_backoff_s:
-                    return server
-            return min(self._servers, key=lambda s: s.failed_at)
-
-    def _failed(self, server: _Server, error: BaseException) -> str:
-        """Record a failed attempt; its reason, or `GeneratorError` once too many failed in a row."""
-        reason = _describe(error)
-        with self._lock:
-            server.failed_at = time.monotonic()
-            self._failures += 1
-            failures = self._failures
-        if failures >= self.cfg.max_consecutive_failures:
-            raise GeneratorError(f"no OpenAI-compatible server answered after {failures} attempts: {reason}") from error
-        return reason
-
-    def _succeeded(self, server: _Server, response: Any, texts: list[str], n: int, seconds: float) -> list[Generation]:
-        with self._lock:
-            self._failures = 0
-            server.failed_at = -float("inf")
-            if n > 1 and len(response.choices) < n and self._use_n:
-                self._use_n = False
-                logger.warning(
-                    "openai: %s returned %d choices for n=%d; asking for one completion per request from now on",
-                    server.url, len(response.choices), n,
-                )
-        usage = getattr(response, "usage", None)
-        prompt_tokens = getattr(usage, "prompt_tokens", 0) or 0
-        completion_tokens = getattr(usage, "completion_tokens", 0) or 0
-        logger.info(
-            "openai: %s: %d completions, %d prompt + %d completion tokens, %.1fs",
-            server.url, len(texts), prompt_tokens, completion_tokens, seconds,
-        )
-        name = f"openai:{self.cfg.model}@{server.url}"
-        return _batch(texts, name, prompt_tokens, _split(completion_tokens, len(texts)), seconds)
-
-
-# --------------------------------------------------------------------------------------------
-# vllm: in-process batched generation on local GPUs
-
-class VLLMGenerator(Generator):
-    """`vllm.LLM` in this process; the batch is the `n` outputs of one chat request."""
-
-    def __init__(self, cfg: VLLMConfig, seed: int):
-        try:
-            import vllm
-        except ImportError:
-            raise GeneratorError("llm=vllm needs vLLM: pip install 'colmo[vllm]'") from None
-        self.cfg = cfg
-        self.name = f"vllm:{cfg.model}"
-        self._sampling_params = vllm.SamplingParams
-        # The engine seed is the config's; each request gets its own seed, or the same prompt
-        # would be answered with the same batch every time.
-        self._seeds = random.Random(seed)
-        try:
-            self._llm = vllm.LLM(
-                model=cfg.model, quantization=cfg.quantization, dtype=cfg.dtype,
-                tensor_parallel_size=cfg.tensor_parallel_size, pipeline_parallel_size=cfg.pipeline_parallel_size,
-                gpu_memory_utilization=cfg.gpu_memory_utilization, max_model_len=cfg.max_model_len, seed=cfg.seed,
-            )
-        except Exception as error:  # CUDA, download, memory and argument errors all end the run
-            raise GeneratorError(f"vLLM could not load {cfg.model}: {_describe(error)}") from error
-
-    def generate(self, prompt: Prompt, n: int) -> list[Generation]:
-        cfg = self.cfg
-        params = self._sampling_params(
-            n=n, temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self._seeds.randrange(2**31)
-        )
-        start = time.perf_counter()
-        [output] = self._llm.chat(prompt.messages, sampling_params=params, use_tqdm=False)
-        seconds = time.perf_counter() - start
-        prompt_tokens = len(output.prompt_token_ids or ())
-        completion_tokens = [len(completion.token_ids) for completion in output.outputs]
-        logger.info(
-            "vllm: %d completions, %d prompt + %d completion tokens, %.1fs",
-            len(output.outputs), prompt_tokens, sum(completion_tokens), seconds,
-        )
-        return _batch([completion.text for completion in output.outputs], self.name, prompt_tokens, completion_tokens, seconds)
-
-    def close(self) -> None:
-        self._llm = None  # the engine frees its GPU memory when collected
-
-
-GENERATORS: dict[str, Callable[[Any, int], Generator]] = {
-    "mutate": MutateGenerator,
-    "openai": OpenAIGenerator,
-    "vllm": VLLMGenerator,
-}
-
-
-def make_generator(cfg: GeneratorConfig, seed: int, probe: Optional[Callable[[str], bool]] = None) -> Generator:
-    """The generator `cfg.name` names, configured by `cfg` (the `llm` config group). `probe(code)`
-    says whether a program runs on the task (see `colmo.sandbox.ProgramProbe`); the embedded
-    generator uses it to offer only working children."""
-    if cfg.name not in GENERATORS:
-        raise ConfigError(f"llm.name must be one of {', '.join(GENERATORS)}; got {cfg.name!r}")
-    if cfg.name == "mutate":
-        return MutateGenerator(cfg, seed, probe)
-    return GENERATORS[cfg.name](cfg, seed)

@@ -1,0 +1,57 @@
+"""`llm=vllm`: in-process batched generation on local GPUs.
+
+vllm runs `vllm.LLM` in this process (`pip install 'colmo[vllm]'`) and samples the batch as the
+`n` outputs of one request through the model's chat template.
+"""
+
+from __future__ import annotations
+
+import random
+import time
+
+from colmo.config import VLLMConfig
+from colmo.generate.base import Generation, Generator, GeneratorError, batch_of, describe_error, logger
+from colmo.prompt import Prompt
+
+class VLLMGenerator(Generator):
+    """`vllm.LLM` in this process; the batch is the `n` outputs of one chat request."""
+
+    def __init__(self, cfg: VLLMConfig, seed: int):
+        try:
+            import vllm
+        except ImportError:
+            raise GeneratorError("llm=vllm needs vLLM: pip install 'colmo[vllm]'") from None
+        self.cfg = cfg
+        self.name = f"vllm:{cfg.model}"
+        self._sampling_params = vllm.SamplingParams
+        # The engine seed is the config's; each request gets its own seed, or the same prompt
+        # would be answered with the same batch every time.
+        self._seeds = random.Random(seed)
+        try:
+            self._llm = vllm.LLM(
+                model=cfg.model, quantization=cfg.quantization, dtype=cfg.dtype,
+                tensor_parallel_size=cfg.tensor_parallel_size, pipeline_parallel_size=cfg.pipeline_parallel_size,
+                gpu_memory_utilization=cfg.gpu_memory_utilization, max_model_len=cfg.max_model_len, seed=cfg.seed,
+            )
+        except Exception as error:  # CUDA, download, memory and argument errors all end the run
+            raise GeneratorError(f"vLLM could not load {cfg.model}: {describe_error(error)}") from error
+
+    def generate(self, prompt: Prompt, n: int) -> list[Generation]:
+        cfg = self.cfg
+        params = self._sampling_params(
+            n=n, temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self._seeds.randrange(2**31)
+        )
+        start = time.perf_counter()
+        [output] = self._llm.chat(prompt.messages, sampling_params=params, use_tqdm=False)
+        seconds = time.perf_counter() - start
+        prompt_tokens = len(output.prompt_token_ids or ())
+        completion_tokens = [len(completion.token_ids) for completion in output.outputs]
+        logger.info(
+            "vllm: %d completions, %d prompt + %d completion tokens, %.1fs",
+            len(output.outputs), prompt_tokens, sum(completion_tokens), seconds,
+        )
+        return batch_of([completion.text for completion in output.outputs], self.name, prompt_tokens, completion_tokens, seconds)
+
+    def close(self) -> None:
+        self._llm = None  # the engine frees its GPU memory when collected
+
