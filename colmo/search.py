@@ -265,9 +265,7 @@ class Search:
         except ForbiddenProgram as error:
             record.status, record.failure = "failed", str(error)
             return self._settled(record)
-        future = self.program_threads.submit(self._optimize, program, record.sample)
-        future.add_done_callback(lambda done: self._persist(record, program, done))
-        return _Pending(record, program, future)
+        return _Pending(record, program, self.program_threads.submit(self._evaluate, record, program))
 
     def _settled(self, record: SampleRecord) -> _Pending:
         self.store.add(record)
@@ -277,10 +275,10 @@ class Search:
         evaluate = batch_evaluator(self.pool, self.spec, self.cfg.task.env, self.seeds, program.skeleton)
         return optimize_program(program, evaluate, self.cfg.gfo, _program_seed(self.cfg.seed, sample))
 
-    def _persist(self, record: SampleRecord, program: ParametricProgram, future: concurrent.futures.Future) -> None:
-        if future.cancelled() or future.exception() is not None:
-            return
-        self._settle(record, program, future.result())
+    def _evaluate(self, record: SampleRecord, program: ParametricProgram) -> None:
+        """Optimize and score one program, and store it, before its future completes: whatever
+        waits on the future then sees the settled record."""
+        self._settle(record, program, self._optimize(program, record.sample))
         self.store.add(record)
 
     @staticmethod
@@ -296,7 +294,7 @@ class Search:
     def _integrate(self, batch: _Batch) -> None:
         for pending in batch.pending:
             if pending.future is not None:
-                pending.future.result()  # persisted by its callback; an exception here is a bug
+                pending.future.result()  # settled and stored; an exception here is a bug
             self._apply(pending.record)
         self.in_flight_samples -= len(batch.pending)
         reset = self.database.on_sample(self.counters.samples)

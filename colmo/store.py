@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+import threading
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -84,6 +85,8 @@ class ProgramStore:
     def __init__(self, path: Path | str):
         self.path = Path(path)
         self.connection = sqlite3.connect(self.path, timeout=30, check_same_thread=False)
+        # Program threads store their results as they finish: one writer at a time.
+        self._lock = threading.Lock()
         self.connection.execute("PRAGMA journal_mode=WAL")
         self.connection.execute("PRAGMA synchronous=NORMAL")
         self.connection.executescript(_SCHEMA)
@@ -105,7 +108,7 @@ class ProgramStore:
             if row[name] is not None:
                 row[name] = json.dumps(row[name])
         columns = ", ".join(row)
-        with self.connection:
+        with self._lock, self.connection:
             self.connection.execute(
                 f"INSERT INTO samples({columns}) VALUES ({', '.join('?' * len(row))})", tuple(row.values())
             )
