@@ -88,7 +88,8 @@ class ExecutorConfig:
 
     @property
     def n_workers(self) -> int:
-        return self.workers or os.cpu_count() or 1
+        # The cores this process may use (a SLURM allocation), not all the node's cores.
+        return self.workers or len(os.sched_getaffinity(0)) or 1
 
 
 @dataclass

@@ -1,0 +1,108 @@
+"""Executor overhead: programs evaluated per minute with executor=local and executor=ray, side by side.
+
+The workload is what the search gives an executor: 16 programs optimized at once, each in its
+own thread (GFO in the coordinator, every candidate an `EvalRequest`). The programs are the
+paper's pendulum policy with its constants scaled (16 fixed variants), tuned with the
+(1+1)-ES, budget 10, on 10 episodes. Both executors are started once, with the same number
+of workers, before the rounds; each round runs both back to back, in alternating order
+(machines are noisy), and the medians are reported, with Ray's overhead relative to local.
+
+    python benchmarks/executor_overhead.py                     # 2 workers, 3 rounds
+    python benchmarks/executor_overhead.py --workers 4 --rounds 5
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import dataclasses
+import os
+import statistics
+import time
+from pathlib import Path
+
+from colmo.config import ExecutorConfig, GFOConfig
+from colmo.executor import make_executor
+from colmo.optimize import optimize_program
+from colmo.program import ParametricProgram, parametrize
+from colmo.sandbox import Executor, batch_evaluator
+from colmo.spec import load_spec
+from colmo.task import episode_seeds
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+MENAGERIE = Path(__file__).resolve().parent.parent.parent / "shared" / "menagerie"
+PROGRAMS = 16
+
+
+def workload() -> list[ParametricProgram]:
+    """The paper's pendulum policy with every constant scaled by one of 16 fixed factors."""
+    paper = parametrize((EXAMPLES / "paper_pendulum.py").read_text())
+    factors = [0.7 + 0.04 * i for i in range(PROGRAMS)]
+    return [dataclasses.replace(paper, values=tuple(v * f for v in paper.values)) for f in factors]
+
+
+def run_round(executor: Executor, programs: list[ParametricProgram], gfo: GFOConfig, episodes: int) -> tuple[float, float, list[float]]:
+    """Seconds to optimize all programs at once, the fraction of that time the workers spent
+    evaluating (the rest is dispatch), and the programs' scores."""
+    spec = load_spec("pendulum.py")
+    seeds = episode_seeds(0, episodes)
+
+    def optimize(index: int) -> float:
+        evaluate = batch_evaluator(executor, spec, {}, seeds, programs[index].skeleton)
+        return optimize_program(programs[index], evaluate, gfo, seed=index).score
+
+    start, busy = time.perf_counter(), executor.busy_seconds
+    with concurrent.futures.ThreadPoolExecutor(len(programs)) as threads:
+        scores = list(threads.map(optimize, range(len(programs))))
+    seconds = time.perf_counter() - start
+    return seconds, (executor.busy_seconds - busy) / (seconds * executor.n_workers), scores
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--workers", type=int, default=2, help="workers of each executor (local processes, Ray actors)")
+    parser.add_argument("--rounds", type=int, default=3, help="alternating rounds; medians are reported")
+    parser.add_argument("--budget", type=int, default=10, help="GFO budget per program")
+    parser.add_argument("--episodes", type=int, default=10, help="episodes per evaluation")
+    args = parser.parse_args()
+    if "MENAGERIE_ROOT" not in os.environ and MENAGERIE.is_dir():
+        os.environ["MENAGERIE_ROOT"] = str(MENAGERIE)
+
+    programs = workload()
+    gfo = GFOConfig(method="oneplusone", budget=args.budget)
+    executors: dict[str, Executor] = {}
+    for name in ("local", "ray"):
+        start = time.perf_counter()
+        executors[name] = make_executor(ExecutorConfig(name=name, workers=args.workers))
+        print(f"{name:5s} executor started in {time.perf_counter() - start:.1f} s", flush=True)
+    try:
+        # One unmeasured round each: sandbox processes start, simulators and programs get built.
+        reference = {name: run_round(executor, programs, gfo, args.episodes)[2] for name, executor in executors.items()}
+        assert reference["local"] == reference["ray"], "the executors disagree on the scores"
+        rates: dict[str, list[float]] = {name: [] for name in executors}
+        busy: dict[str, list[float]] = {name: [] for name in executors}
+        for index in range(args.rounds):
+            order = list(executors) if index % 2 == 0 else list(reversed(executors))  # no side always runs first
+            for name in order:
+                seconds, fraction, _ = run_round(executors[name], programs, gfo, args.episodes)
+                rates[name].append(len(programs) / seconds * 60)
+                busy[name].append(fraction)
+            print(f"round {index + 1}: local {rates['local'][-1]:6.1f}, ray {rates['ray'][-1]:6.1f} programs/min", flush=True)
+    finally:
+        for executor in executors.values():
+            executor.close()
+
+    local, ray = (statistics.median(rates[name]) for name in ("local", "ray"))
+    # Each round's pair ran back to back, under the same load: their ratio is the fair comparison.
+    overhead = statistics.median(l / r - 1 for l, r in zip(rates["local"], rates["ray"])) * 100
+    print(
+        f"\n{PROGRAMS} pendulum programs, gfo=oneplusone budget {args.budget}, {args.episodes} episodes, "
+        f"{args.workers} workers, {args.rounds} rounds (medians):\n"
+        f"  executor=local {local:7.1f} programs/min, workers busy {statistics.median(busy['local']):.1%} of the time\n"
+        f"  executor=ray   {ray:7.1f} programs/min, workers busy {statistics.median(busy['ray']):.1%} of the time\n"
+        f"  Ray overhead   {overhead:+6.1f} % (median of the rounds' local/ray rate ratios, minus 1)"
+    )
+
+
+if __name__ == "__main__":
+    main()
