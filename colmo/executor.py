@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any, Optional, Sequence
 
 from colmo.config import ConfigError, ExecutorConfig, one_line
-from colmo.sandbox import EvalRequest, Executor, WorkerPool
+from colmo.sandbox import EvalRequest, Executor, WorkerPool, drain
 from colmo.task import Evaluation
 
 log = logging.getLogger("colmo.executor")
@@ -215,14 +215,9 @@ class RayExecutor:
         self._shutdown_ray()
 
     def _cancel_queued(self) -> None:
-        while True:
-            try:
-                job = self.jobs.get_nowait()
-            except queue.Empty:
-                return
-            if job is not None and not job.future.cancel():  # a retry: its caller already waits
+        for job in drain(self.jobs):
+            if not job.future.cancel():  # a retry: its caller already waits
                 job.future.set_result(Evaluation(failure="cancelled: the executor was closed"))
-            self.jobs.task_done()
 
     def _stop_actors(self, graceful: bool) -> None:
         with self._lock:

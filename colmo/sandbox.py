@@ -607,6 +607,19 @@ class _Worker:
         return f"crash: the worker exited with code {code}"
 
 
+def drain(jobs: queue.Queue) -> list[Any]:
+    """Take every job still queued (stop markers, `None`, dropped), without waiting."""
+    taken = []
+    while True:
+        try:
+            job = jobs.get_nowait()
+        except queue.Empty:
+            return taken
+        jobs.task_done()
+        if job is not None:
+            taken.append(job)
+
+
 class WorkerPool:
     """`workers` sandboxed processes evaluating `EvalRequest`s; results come back as futures."""
 
@@ -709,13 +722,8 @@ class WorkerPool:
         shutil.rmtree(self.tmpdir, ignore_errors=True)
 
     def _cancel_queued(self) -> None:
-        while True:
-            try:
-                job = self.jobs.get_nowait()
-            except queue.Empty:
-                return
-            if job is not None:
-                job[1].cancel()
+        for _, future in drain(self.jobs):
+            future.cancel()
 
     def __enter__(self) -> "WorkerPool":
         return self

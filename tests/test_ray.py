@@ -107,8 +107,11 @@ def test_killed_actor_requests_are_retried_on_a_replacement(ray_instance, caplog
         assert results == expected  # every request answered once, in order, as if nothing happened
         assert all(result.failure is None for result in results)
         assert any("retrying its request (retry 1 of 2)" in message for message in caplog.messages)
-        assert victim not in executor.worker_pids() and len(executor.worker_pids()) == 2
         assert executor.evaluate(requests[:2]) == expected[:2]  # the replacement works
+        deadline = time.time() + 60  # a replacement actor starts in the background
+        while len(executor.worker_pids()) < 2 and time.time() < deadline:
+            time.sleep(0.2)
+        assert victim not in executor.worker_pids() and len(executor.worker_pids()) == 2
     finally:
         executor.close()
 
