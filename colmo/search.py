@@ -100,6 +100,10 @@ def _record(sample: int, batch: int, island: int, parents: list[str], generation
     )
 
 
+def _describe_program(record: SampleRecord, program: ParametricProgram) -> None:
+    record.key, record.skeleton, record.initial_params = program.key, program.skeleton, list(program.values)
+
+
 def _program_seed(seed: int, sample: int) -> int:
     return int(np.random.SeedSequence([seed, sample + 1]).generate_state(1)[0])
 
@@ -147,6 +151,7 @@ class Search:
             if result.failure:
                 raise ConfigError(f"the starter policy in {self.spec.path} fails: {result.failure}")
             starter = _record(STARTER_SAMPLE, -1, -1, [], Generation(self.spec.starter_code, "spec"))
+            _describe_program(starter, program)
             self._settle(starter, program, result)
             self.store.add(starter)
         return StoredProgram(starter.key, starter.code, starter.score, 0, STARTER_SAMPLE)
@@ -254,7 +259,7 @@ class Search:
         except (ExtractionError, ProgramError) as error:
             record.failure = f"unusable output: {error}"
             return self._settled(record)
-        record.key, record.skeleton, record.initial_params = program.key, program.skeleton, list(program.values)
+        _describe_program(record, program)
         if self.database.is_known(program.key):
             record.status = "duplicate"
             return self._settled(record)
@@ -283,7 +288,6 @@ class Search:
 
     @staticmethod
     def _settle(record: SampleRecord, program: ParametricProgram, result: ProgramResult) -> None:
-        record.key, record.skeleton, record.initial_params = program.key, program.skeleton, list(program.values)
         record.status = "failed" if result.failure else "evaluated"
         record.code, record.params = result.code, list(result.params)
         record.initial_score = result.initial.score if math.isfinite(result.initial.score) else None
@@ -334,6 +338,14 @@ class Search:
             "evaluation_seconds": time.perf_counter() - batch.started,
             "queue_depth": self.next_batch - batch.index - 1,
             "evaluations_per_second": self.counters.evaluations / wall,
+            **self._busy_fractions(wall),
+        }
+
+    def _busy_fractions(self, wall: float) -> dict[str, float]:
+        """Fractions of the wall time the generator, and the evaluation workers, were busy."""
+        if not wall:
+            return {"generator_busy": 0.0, "evaluator_busy": 0.0}
+        return {
             "generator_busy": self.generation_seconds / wall,
             "evaluator_busy": self.pool.busy_seconds / (wall * self.pool.n_workers),
         }
@@ -353,8 +365,7 @@ class Search:
             "unusable_outputs": self.counters.invalid,
             "evaluations": self.counters.evaluations,
             "seconds": round(wall, 3),
-            "generator_busy": round(self.generation_seconds / wall, 4) if wall else 0.0,
-            "evaluator_busy": round(self.pool.busy_seconds / (wall * self.pool.n_workers), 4) if wall else 0.0,
+            **{name: round(value, 4) for name, value in self._busy_fractions(wall).items()},
             "best_so_far": self.best_so_far,
             "stop_reason": self.stop_reason,
             "run_dir": str(self.run_dir),
