@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 
 from colmo.program import parametrize
-from colmo.sandbox import compile_policy
+from colmo.sandbox.namespace import load_policy
 from colmo.spec import load_spec
 from colmo.task import as_action
 
@@ -38,12 +38,11 @@ TASKS = {
 }
 
 
-def load_policy(task: str) -> Callable:
+def paper_policy(task: str) -> Callable:
+    """The paper's policy for `task`, loaded in this process (it is the paper's code, trusted)."""
     spec = load_spec(f"{task}.py")
     program = parametrize((EXAMPLES / TASKS[task][0]).read_text())
-    namespace = compile_policy(program.skeleton, spec.allowed_imports)
-    namespace["params"] = program.values
-    return namespace["policy"]
+    return load_policy(program.skeleton, spec.allowed_imports, program.values)
 
 
 def steps_per_second(run: Callable[[int], None], steps: int) -> float:
@@ -126,7 +125,7 @@ def breakdown(env, policy, steps: int) -> dict[str, float]:
 
 def benchmark(task: str, steps: int, rounds: int) -> None:
     env = load_spec(f"{task}.py").make_environment()
-    policy = load_policy(task)
+    policy = paper_policy(task)
     loops = {"colmo": colmo_loop(env, policy), "floor": physics_floor(env)}
     domain_task = TASKS[task][1]
     baseline = "dm_control" if domain_task else "plain mujoco"

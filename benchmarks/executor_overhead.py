@@ -21,11 +21,11 @@ import statistics
 import time
 from pathlib import Path
 
-from colmo.config import ExecutorConfig, GFOConfig
+from colmo.config import ExecutorConfig, GFOConfig, RayExecutorConfig
+from colmo.evaluation import Evaluator, Executor
 from colmo.executor import make_executor
-from colmo.optimize import optimize_program
+from colmo.optimize import CandidateEvaluator, optimize_program
 from colmo.program import ParametricProgram, parametrize
-from colmo.sandbox import Executor, batch_evaluator
 from colmo.spec import load_spec
 from colmo.task import episode_seeds
 
@@ -44,11 +44,10 @@ def workload() -> list[ParametricProgram]:
 def run_round(executor: Executor, programs: list[ParametricProgram], gfo: GFOConfig, episodes: int) -> tuple[float, float, list[float]]:
     """Seconds to optimize all programs at once, the fraction of that time the workers spent
     evaluating (the rest is dispatch), and the programs' scores."""
-    spec = load_spec("pendulum.py")
-    seeds = episode_seeds(0, episodes)
+    evaluator = Evaluator.for_task(load_spec("pendulum.py"), {}, episode_seeds(0, episodes), memory_mb=4096, timeout_s=60)
 
     def optimize(index: int) -> float:
-        evaluate = batch_evaluator(executor, spec, {}, seeds, programs[index].skeleton)
+        evaluate = CandidateEvaluator(executor, evaluator, programs[index].skeleton)
         return optimize_program(programs[index], evaluate, gfo, seed=index).score
 
     start, busy = time.perf_counter(), executor.busy_seconds
@@ -73,7 +72,7 @@ def main() -> None:
     executors: dict[str, Executor] = {}
     for name in ("local", "ray"):
         start = time.perf_counter()
-        executors[name] = make_executor(ExecutorConfig(name=name, workers=args.workers))
+        executors[name] = make_executor((RayExecutorConfig if name == "ray" else ExecutorConfig)(workers=args.workers))
         print(f"{name:5s} executor started in {time.perf_counter() - start:.1f} s", flush=True)
     try:
         # One unmeasured round each: sandbox processes start, simulators and programs get built.
@@ -94,7 +93,7 @@ def main() -> None:
 
     local, ray = (statistics.median(rates[name]) for name in ("local", "ray"))
     # Each round's pair ran back to back, under the same load: their ratio is the fair comparison.
-    overhead = statistics.median(l / r - 1 for l, r in zip(rates["local"], rates["ray"])) * 100
+    overhead = statistics.median(local_rate / ray_rate - 1 for local_rate, ray_rate in zip(rates["local"], rates["ray"])) * 100
     print(
         f"\n{PROGRAMS} pendulum programs, gfo=oneplusone budget {args.budget}, {args.episodes} episodes, "
         f"{args.workers} workers, {args.rounds} rounds (medians):\n"

@@ -7,15 +7,6 @@ Data flows one way: generator (`generate`) → extraction (`extract`) → parame
 """
 
 from importlib.metadata import PackageNotFoundError, version
-from pathlib import Path
-
-# The wheel ships the top-level conf/ and specs/ inside the package (pyproject maps them to
-# colmo.conf and colmo.specs). A process that imports colmo from a source checkout (Python
-# puts the working directory first on sys.path, so tests and Ray workers started in the
-# repository root do) resolves them the same way.
-_checkout = Path(__file__).resolve().parent.parent
-if not (Path(__file__).parent / "conf").is_dir() and (_checkout / "conf" / "__init__.py").is_file():
-    __path__.append(str(_checkout))
 
 try:
     __version__ = version("colmo")

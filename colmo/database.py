@@ -8,7 +8,11 @@ are grouped into islands and clusters, and which ones a prompt shows.
   score itself.
 - A prompt is drawn in two stages: a uniformly random island, then clusters by a softmax over
   their scores whose temperature is annealed (FunSearch's schedule), then within each cluster
-  a program, shorter ones preferred.
+  a program, shorter ones preferred. Size counts in AST nodes (`colmo.astutil.node_count`).
+  With `size_penalty`, a cluster is drawn by its score less `size_penalty` points per AST node
+  of its smallest program, so a slightly better but much bigger program does not crowd the
+  readable ones out of the prompts (programs above `max_nodes` are refused before they are
+  evaluated, by the search).
 - Every `reset_every` samples the weaker half of the islands is emptied and each is re-seeded
   with the best program of a randomly chosen surviving island.
 - Programs are identified by their structure key (the code with its constants abstracted):
@@ -26,12 +30,12 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 
 from colmo.config import DatabaseConfig
-from colmo.program import count_lines
+from colmo.program import measure
 
 
 @dataclass(frozen=True)
@@ -41,6 +45,11 @@ class StoredProgram:
     score: float  # finite: failed programs are never registered
     island: int
     sample: int  # sample index at which it was generated
+    nodes: Optional[int] = None  # AST nodes: its size to read; measured from `code` if not given
+
+    def __post_init__(self) -> None:
+        if self.nodes is None:
+            object.__setattr__(self, "nodes", measure(self.code).nodes)
 
 
 @dataclass(frozen=True)
@@ -52,7 +61,7 @@ class Selection:
 @dataclass
 class _Island:
     clusters: dict[float, list[StoredProgram]] = field(default_factory=dict)  # by score
-    lengths: dict[str, int] = field(default_factory=dict)  # count_lines of each program, by key
+    lengths: dict[str, int] = field(default_factory=dict)  # AST nodes of each program, by key
     best: StoredProgram | None = None
 
     @property
@@ -85,7 +94,7 @@ class ProgramDatabase:
         """Programs of one island for the next prompt, ascending score."""
         island_id = int(self._select_rng.integers(len(self._islands)))
         island = self._islands[island_id]
-        scores = np.array(list(island.clusters), dtype=float)
+        scores = np.array([score - self.cfg.size_penalty * min(p.nodes for p in cluster) for score, cluster in island.clusters.items()], dtype=float)
         temperature = self.cluster_temperature(island_id)
         # Clusters are drawn without replacement (FunSearch draws with replacement), so a prompt
         # never shows the same structure twice.
@@ -94,7 +103,8 @@ class ProgramDatabase:
         for _ in range(min(len(scores), self.cfg.functions_per_prompt)):
             probabilities = _softmax(scores[remaining] / temperature)
             chosen.append(remaining.pop(self._select_rng.choice(len(remaining), p=probabilities)))
-        programs = [self._pick_in_cluster(island, island.clusters[scores[i]]) for i in chosen]
+        clusters = list(island.clusters.values())
+        programs = [self._pick_in_cluster(island, clusters[i]) for i in chosen]
         return Selection(island_id, sorted(programs, key=lambda program: program.score))
 
     def cluster_temperature(self, island: int) -> float:
@@ -118,7 +128,7 @@ class ProgramDatabase:
         island = self._islands[program.island]
         assert program.key not in island.lengths, f"structure {program.key} is already on island {program.island}"
         island.clusters.setdefault(program.score, []).append(program)
-        island.lengths[program.key] = count_lines(program.code)
+        island.lengths[program.key] = program.nodes
         if island.best is None or program.score > island.best.score:
             island.best = program
         if self._best is None or program.score > self._best.score:

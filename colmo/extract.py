@@ -19,39 +19,57 @@ Rules, in the order they apply:
     the sandbox's import check. When a name is defined twice, the last definition wins. Other
     versions are dropped unless the chosen one calls them; top-level statements that run code
     (prints, tests, `if __name__ == ...`) are always dropped.
-  * `import numpy as np` / `import math` are added when the code uses `np` / `math` unbound.
+  * `import numpy as np` / `import math` are added when the code uses `np` / `math` unbound, and
+    `from math import sqrt, pi` when it uses names of the math module (`sqrt`, `pi`, ...) that
+    nothing in it binds.
+  * A completion (a model continuing the prompt text, `prompt_format=completion`) is extracted
+    with `prefix=` the prompt text it continues: prefix and completion are read as one answer
+    without fences, and only a version whose definition ends in the completion can be chosen,
+    so a continuation whose body does not parse is rejected instead of falling back to a
+    version the prompt showed. The prompt's helpers can be used by the new version.
 The result is formatted by ast.unparse, which drops comments; the caller keeps the raw text.
 """
 
 from __future__ import annotations
 
 import ast
+import math
 import re
 
 _FENCE = re.compile(r"\s*```")
 # Lines that can open a stretch of code (definition, import, assignment); prose rarely does.
 _CODE_START = re.compile(r"\s*(?:(?:async\s+)?def\s|class\s|import\s|from\s+[\w.]+\s+import\s|@\w|[A-Za-z_]\w*\s*(?::[^=]+)?=(?!=))")
 _MISSING_IMPORTS = {"np": "import numpy as np", "numpy": "import numpy", "math": "import math"}
+_MATH_NAMES = frozenset(name for name in dir(math) if not name.startswith("_"))
 
 
 class ExtractionError(ValueError):
     """No usable policy in the answer; the message is a one-line reason."""
 
 
-def extract_policy(text: str, function_name: str = "policy") -> str:
-    """The policy module (imports, helpers, `def policy`) in a language model's answer."""
+def extract_policy(text: str, function_name: str = "policy", prefix: str = "") -> str:
+    """The policy module (imports, helpers, `def policy`) in a language model's answer `text`;
+    for a completion, `prefix` is the prompt text that `text` continues."""
     try:
-        return _extract(text, function_name)
+        return _extract(text, function_name, prefix)
     except (RecursionError, MemoryError):  # the parser and AST visitors recurse per nesting level
         raise ExtractionError("the answer is nested too deeply to parse") from None
 
 
-def _extract(text: str, function_name: str) -> str:
+def _extract(text: str, function_name: str, prefix: str) -> str:
     version = re.compile(rf"{re.escape(function_name)}(?:_v\d+)?")
-    statements = [s for block in _fenced_blocks(text) for module in _code_regions(block) for s in module.body]
-    if not _versions(statements, version):
-        statements = [s for module in _code_regions(text) for s in module.body]
-    versions = _versions(statements, version)
+    if prefix:
+        statements = [s for module in _code_regions(prefix + text) for s in module.body]
+        # Lines up to here are the prompt's alone; the version the completion wrote ends after them.
+        prompt_lines = prefix.count("\n")
+        versions = [f for f in _versions(statements, version) if f.end_lineno > prompt_lines]
+        if not versions:
+            raise ExtractionError(f"the completion holds no complete body of '{function_name}'")
+    else:
+        statements = [s for block in _fenced_blocks(text) for module in _code_regions(block) for s in module.body]
+        if not _versions(statements, version):
+            statements = [s for module in _code_regions(text) for s in module.body]
+        versions = _versions(statements, version)
     if not versions:
         if re.search(rf"^\s*def\s+{version.pattern}\s*\(", text, re.MULTILINE):
             raise ExtractionError(f"found 'def {function_name}' but no complete top-level definition of it")
@@ -82,7 +100,8 @@ def _fenced_blocks(text: str) -> list[str]:
 
 
 def _code_regions(chunk: str) -> list[ast.Module]:
-    """Every parseable stretch of code in `chunk`, skipping the prose between them."""
+    """Every parseable stretch of code in `chunk`, skipping the prose between them; line
+    numbers are the chunk's."""
     lines = chunk.splitlines()
     modules, start = [], 0
     while start < len(lines):
@@ -90,8 +109,9 @@ def _code_regions(chunk: str) -> list[ast.Module]:
         if found is None:
             start += 1
         else:
-            module, start = found
-            modules.append(module)
+            module, end = found
+            modules.append(ast.increment_lineno(module, start))
+            start = end
     return modules
 
 
@@ -183,4 +203,11 @@ def _add_missing_imports(module: ast.Module) -> None:
     bound |= {name for n in ast.walk(module) if isinstance(n, (ast.Import, ast.ImportFrom)) for name in _bound_names(n)}
     used = {n.id for n in ast.walk(module) if isinstance(n, ast.Name)}
     missing = [ast.parse(line).body[0] for name, line in _MISSING_IMPORTS.items() if name in used - bound]
+    # Names bound anywhere (a local `pi = 3.14`, an argument) are not the math module's.
+    bound_anywhere = bound | {n.id for n in ast.walk(module) if isinstance(n, ast.Name) and not isinstance(n.ctx, ast.Load)}
+    bound_anywhere |= {a.arg for a in ast.walk(module) if isinstance(a, ast.arg)}
+    bound_anywhere |= {n.name for n in ast.walk(module) if isinstance(n, (ast.FunctionDef, ast.ClassDef, ast.ExceptHandler)) and n.name}
+    from_math = sorted((used - bound_anywhere) & _MATH_NAMES)
+    if from_math:
+        missing.append(ast.ImportFrom(module="math", names=[ast.alias(name) for name in from_math], level=0))
     module.body[:0] = missing

@@ -5,7 +5,7 @@ A policy program is a Python module (imports, constants, helpers) that defines `
 gradient-free optimizer can tune the constants (paper Sec. IV-C), and `instantiate` writes values
 back. The skeleton reads `params` as a free global: `exec(skeleton, {"params": values, ...})`.
 The structure key is the sha256 of the skeleton's AST dump, so programs that differ only in
-tunable constants, comments, docstrings or formatting share a key; a changed index, name or
+tunable constants, comments, docstrings, unused imports or formatting share a key; a changed index, name or
 operator gives a new one.
 
 Which literals are tunable
@@ -45,6 +45,8 @@ import hashlib
 import math
 from dataclasses import dataclass
 from typing import Sequence
+
+from colmo.astutil import bound_names, identifiers, is_number_literal, node_count, rename, replace_nodes, stored_names, strip_docstrings
 
 PARAMS_NAME = "params"
 
@@ -96,17 +98,25 @@ def _parametrize(code: str, function_name: str) -> ParametricProgram:
     tree = _parse(code)
     if not any(isinstance(s, (ast.FunctionDef, ast.AsyncFunctionDef)) and s.name == function_name for s in tree.body):
         raise ProgramError(f"no function named '{function_name}'")
-    _strip_docstrings(tree)
-    identifiers = _identifiers(tree)
-    if PARAMS_NAME in identifiers:
+    strip_docstrings(tree)
+    _drop_unused_imports(tree)
+    names = identifiers(tree)
+    if PARAMS_NAME in names:
         fresh = PARAMS_NAME + "_"
-        while fresh in identifiers:
+        while fresh in names:
             fresh += "_"
-        _rename(tree, PARAMS_NAME, fresh)
+        rename(tree, {PARAMS_NAME: fresh})
     literals = _tunable_literals(tree)
     slots = {id(node): _slot(i) for i, node in enumerate(literals)}
-    skeleton = ast.unparse(_Replace(slots).visit(tree))
+    skeleton = ast.unparse(replace_nodes(tree, slots))
     return ParametricProgram(skeleton, tuple(float(_value(node)) for node in literals), structure_key(skeleton))
+
+
+def _drop_unused_imports(tree: ast.Module) -> None:
+    """Module-level imports nothing uses are not structure: a copy of a program that leaves out
+    its unused `import numpy as np` is the same program."""
+    used = {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)}
+    tree.body = [s for s in tree.body if not isinstance(s, (ast.Import, ast.ImportFrom)) or set(bound_names(s)) & used] or tree.body
 
 
 def instantiate(skeleton: str, values: Sequence[float], digits: int | None = None) -> str:
@@ -121,21 +131,38 @@ def instantiate(skeleton: str, values: Sequence[float], digits: int | None = Non
     if needed != len(values):
         raise ProgramError(f"skeleton takes {needed} parameters, got {len(values)} values")
     literals = {id(slot): _literal(values[slot.slice.value], digits) for slot in slots}
-    return ast.unparse(_Replace(literals).visit(tree))
+    return ast.unparse(replace_nodes(tree, literals))
 
 
 def count_lines(code: str) -> int:
     """Non-blank lines of the module once docstrings and comments are gone, as ast.unparse lays it out
     (so the count does not depend on the author's line wrapping)."""
     tree = _parse(code)
-    _strip_docstrings(tree)
+    strip_docstrings(tree)
     return sum(1 for line in ast.unparse(tree).splitlines() if line.strip())
+
+
+@dataclass(frozen=True)
+class ProgramSize:
+    """How big a program is to read: lines (as `count_lines`), AST nodes (`astutil.node_count`,
+    docstrings excluded; a signed literal is one node) and tunable constants. The one size colmo
+    reports: the store, the search, `colmo.optimize` and `colmo.simplify` all use `measure`."""
+
+    lines: int
+    nodes: int
+    params: int
+
+
+def measure(code: str) -> ProgramSize:
+    tree = _parse(code)
+    strip_docstrings(tree)
+    return ProgramSize(count_lines(code), node_count(tree), len(_tunable_literals(tree)))
 
 
 def structure_key(skeleton: str) -> str:
     """sha256 hex of the skeleton's AST dump (positions excluded, so formatting does not count)."""
     tree = _parse(skeleton)
-    _strip_docstrings(tree)
+    strip_docstrings(tree)
     return hashlib.sha256(ast.dump(tree).encode()).hexdigest()
 
 
@@ -148,60 +175,8 @@ def _parse(code: str) -> ast.Module:
         raise ProgramError(f"unparseable source: {error}") from None
 
 
-def _strip_docstrings(tree: ast.Module) -> None:
-    """Drop docstrings and other bare string statements; they are comments to the interpreter."""
-    for node in ast.walk(tree):
-        for field in ("body", "orelse", "finalbody"):
-            statements = getattr(node, field, None)
-            if not isinstance(statements, list):
-                continue
-            kept = [s for s in statements if not (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant) and isinstance(s.value.value, str))]
-            if not kept and field == "body" and not isinstance(node, ast.Module):
-                kept = [ast.Pass()]
-            setattr(node, field, kept)
-
-
-def _identifiers(tree: ast.AST) -> set[str]:
-    names = set()
-    for node in ast.walk(tree):
-        for field in ("id", "arg", "name", "asname"):
-            value = getattr(node, field, None)
-            if isinstance(value, str):
-                names.add(value)
-        if isinstance(node, (ast.Global, ast.Nonlocal)):
-            names.update(node.names)
-    return names
-
-
-def _rename(tree: ast.AST, old: str, new: str) -> None:
-    """Rename the identifier `old` everywhere it is bound or used (attributes are not identifiers)."""
-    local_functions = {n.name for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))}
-    for node in ast.walk(tree):  # breadth-first: a call is seen before its callee's name changes
-        if isinstance(node, ast.Name) and node.id == old:
-            node.id = new
-        elif isinstance(node, ast.arg) and node.arg == old:
-            node.arg = new
-        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.ExceptHandler)) and node.name == old:
-            node.name = new
-        elif isinstance(node, ast.alias) and (node.asname or node.name) == old:
-            node.asname = new
-        elif isinstance(node, (ast.Global, ast.Nonlocal)):
-            node.names = [new if name == old else name for name in node.names]
-        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in local_functions:
-            for keyword in node.keywords:
-                if keyword.arg == old:
-                    keyword.arg = new
-
-
 def _is_number(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-def _is_literal(node: ast.AST) -> bool:
-    """A number, possibly signed: `-3.2` is one literal, not an operator applied to one."""
-    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-        node = node.operand
-    return isinstance(node, ast.Constant) and _is_number(node.value)
 
 
 def _value(node: ast.expr) -> int | float:
@@ -211,15 +186,11 @@ def _value(node: ast.expr) -> int | float:
 
 
 def _is_int_literal(node: ast.AST) -> bool:
-    return _is_literal(node) and isinstance(_value(node), int)
+    return is_number_literal(node) and isinstance(_value(node), int)
 
 
 def _is_sequence(node: ast.AST) -> bool:
     return isinstance(node, (ast.List, ast.Tuple, ast.ListComp)) or (isinstance(node, ast.Constant) and isinstance(node.value, str))
-
-
-def _stored_names(targets: Sequence[ast.expr]) -> set[str]:
-    return {n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
 
 
 class _Literals(ast.NodeVisitor):
@@ -251,7 +222,7 @@ class _Literals(ast.NodeVisitor):
             self._literal(node)
 
     def visit_UnaryOp(self, node: ast.UnaryOp) -> None:
-        if _is_literal(node):
+        if is_number_literal(node):
             self._literal(node)
         else:
             self.generic_visit(node)
@@ -311,23 +282,23 @@ class _Literals(ast.NodeVisitor):
     def visit_Assign(self, node: ast.Assign) -> None:
         for target in node.targets:
             self.visit(target)
-        self._bound_value(_stored_names(node.targets), node.value)
+        self._bound_value(stored_names(node.targets), node.value)
 
     def visit_AugAssign(self, node: ast.AugAssign) -> None:
         self.visit(node.target)
-        self._bound_value(_stored_names([node.target]), node.value)
+        self._bound_value(stored_names([node.target]), node.value)
 
     def visit_AnnAssign(self, node: ast.AnnAssign) -> None:
         self.visit(node.target)
         if node.value is not None:
-            self._bound_value(_stored_names([node.target]), node.value)
+            self._bound_value(stored_names([node.target]), node.value)
 
     def visit_NamedExpr(self, node: ast.NamedExpr) -> None:
         self._bound_value({node.target.id}, node.value)
 
     def visit_For(self, node: ast.For | ast.AsyncFor) -> None:
         self.visit(node.target)
-        self._bound_value(_stored_names([node.target]), node.iter)
+        self._bound_value(stored_names([node.target]), node.iter)
         for statement in node.body + node.orelse:
             self.visit(statement)
 
@@ -335,7 +306,7 @@ class _Literals(ast.NodeVisitor):
 
     def visit_comprehension(self, node: ast.comprehension) -> None:
         self.visit(node.target)
-        self._bound_value(_stored_names([node.target]), node.iter)
+        self._bound_value(stored_names([node.target]), node.iter)
         for condition in node.ifs:
             self.visit(condition)
 
@@ -405,14 +376,3 @@ def _literal(value: float, digits: int | None) -> ast.expr:
     if math.copysign(1.0, value) < 0:
         return ast.UnaryOp(ast.USub(), ast.Constant(-value))
     return ast.Constant(value)
-
-
-class _Replace(ast.NodeTransformer):
-    """Swap nodes, identified by id(), for replacement nodes."""
-
-    def __init__(self, replacements: dict[int, ast.expr]):
-        self.replacements = replacements
-
-    def visit(self, node: ast.AST) -> ast.AST:
-        replacement = self.replacements.get(id(node))
-        return replacement if replacement is not None else self.generic_visit(node)

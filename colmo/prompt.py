@@ -21,6 +21,9 @@ from dataclasses import dataclass
 from colmo.database import Selection
 
 NUMPY_IMPORT = "import numpy as np"
+# Where a completion of the prompt text ends: the next top-level statement after the function.
+# Four at most: OpenAI's completions endpoint takes no more.
+COMPLETION_STOP = ("\ndef ", "\nclass ", "\nif __name__", "\n```")
 
 
 @dataclass(frozen=True)

@@ -89,7 +89,7 @@ def load_spec(name_or_path: str) -> Spec:
 
 def load_task_spec(name_or_path: str) -> Spec:
     """`load_spec` for a configured task: a bad spec is the user's configuration error."""
-    from colmo.config import ConfigError
+    from colmo.errors import ConfigError
 
     try:
         return load_spec(name_or_path)

@@ -1,117 +1,117 @@
-"""The durable program store: one SQLite file per run that records every sample as it lands.
+"""The durable program store of a run, and the run directory's files and lock.
 
-Each generated sample gets one row, keyed by its sample index: evaluated programs with code,
-skeleton, initial and tuned constants, score, per-episode returns, island, parents,
-generator and timings, and also failures, duplicates and unusable outputs with their reason.
-Rows are committed one at a time in WAL mode, so a run killed at any moment keeps every
-program it finished; the primary key makes a sample impossible to count twice. `resume=`
-rebuilds the search state by reading the rows back in order.
+A run directory holds `programs.db` (this store), `summary.json`, `best_policy.py`, and a lock
+file. The store is one SQLite file that records every sample as it lands: one row per
+generated sample, keyed by its sample index, with code, skeleton, initial and final constants,
+scores, per-episode returns, sizes, island, parents, generator and timings, and also failures,
+duplicates and unusable outputs with their reason. Rows are committed one at a time in WAL
+mode, so a run killed at any moment keeps every program it finished; the primary key makes a
+sample impossible to count twice. `resume=` rebuilds the search state by reading the rows back.
+
+`open_run` opens (and locks) the store of a new or resumed run: a second search into the same
+directory, a resume with settings that change scores, a corrupt or empty store, or a directory
+that cannot be written are each one `ConfigError` line naming the path.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
+import logging
+import os
 import sqlite3
 import threading
-import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, fields
 from pathlib import Path
-from typing import Any, Iterator, Optional
+from typing import TYPE_CHECKING, Any, Iterator, Mapping, Optional
 
-from colmo.config import ConfigError
+from colmo.errors import ConfigError, RunError
+from colmo.record import INTERRUPTED, SampleRecord, Summary
+
+log = logging.getLogger("colmo.store")
+
+if TYPE_CHECKING:
+    from colmo.config import SearchConfig
 
 STORE_FILE = "programs.db"
+SUMMARY_FILE = "summary.json"
+BEST_POLICY_FILE = "best_policy.py"
+SIMPLIFIED_POLICY_FILE = "simplified_policy.py"
+LOCK_FILE = ".colmo.lock"
 
-_SCHEMA = """
+_SQL_TYPES = {"int": "INTEGER", "float": "REAL", "str": "TEXT", "bool": "INTEGER"}
+_JSON_FIELDS = ("parent_keys", "initial_params", "params", "returns")
+
+
+def _column(name: str, annotation: str) -> str:
+    if name in _JSON_FIELDS:
+        return f"{name} TEXT"
+    kind = next((sql for python, sql in _SQL_TYPES.items() if annotation.removeprefix("Optional[").startswith(python)), "TEXT")
+    return f"{name} {kind}{'' if annotation.startswith('Optional') else ' NOT NULL'}"
+
+
+_COLUMNS = [(f.name, _column(f.name, str(f.type))) for f in fields(SampleRecord)]
+_SCHEMA = f"""
 CREATE TABLE IF NOT EXISTS run (name TEXT PRIMARY KEY, value TEXT NOT NULL);
-CREATE TABLE IF NOT EXISTS samples (
-    sample INTEGER PRIMARY KEY,
-    batch INTEGER NOT NULL,
-    status TEXT NOT NULL,            -- evaluated | failed | duplicate | invalid
-    island INTEGER NOT NULL,
-    parent_keys TEXT NOT NULL,       -- JSON list
-    generator TEXT NOT NULL,
-    raw TEXT NOT NULL,               -- the generator's output as it came
-    key TEXT,
-    skeleton TEXT,
-    code TEXT,                       -- readable code with the tuned constants inlined
-    initial_params TEXT,             -- JSON list
-    params TEXT,                     -- JSON list
-    initial_score REAL,
-    score REAL,
-    returns TEXT,                    -- JSON list, per episode
-    evaluations INTEGER,
-    failure TEXT,
-    generation_seconds REAL,
-    evaluation_seconds REAL,
-    prompt_tokens INTEGER,
-    completion_tokens INTEGER,
-    created REAL NOT NULL
-);
+CREATE TABLE IF NOT EXISTS samples ({', '.join(column if name != 'sample' else 'sample INTEGER PRIMARY KEY' for name, column in _COLUMNS)});
 CREATE INDEX IF NOT EXISTS samples_key ON samples(key);
 """
 
 
-@dataclass
-class SampleRecord:
-    sample: int
-    batch: int
-    status: str
-    island: int
-    parent_keys: list[str]
-    generator: str
-    raw: str
-    key: Optional[str] = None
-    skeleton: Optional[str] = None
-    code: Optional[str] = None
-    initial_params: Optional[list[float]] = None
-    params: Optional[list[float]] = None
-    initial_score: Optional[float] = None
-    score: Optional[float] = None
-    returns: Optional[list[float]] = None
-    evaluations: Optional[int] = None
-    failure: Optional[str] = None
-    generation_seconds: float = 0.0
-    evaluation_seconds: float = 0.0
-    prompt_tokens: int = 0
-    completion_tokens: int = 0
-    created: float = field(default_factory=time.time)
-
-
-_JSON_FIELDS = ("parent_keys", "initial_params", "params", "returns")
+class StoreError(RunError):
+    """The store cannot be written (a full disk, an I/O error); what it holds is intact."""
 
 
 class ProgramStore:
+    """One run's samples in SQLite; `add` may be called from several threads."""
+
     def __init__(self, path: Path | str):
         self.path = Path(path)
-        self.connection = sqlite3.connect(self.path, timeout=30, check_same_thread=False)
+        try:
+            self.connection = sqlite3.connect(self.path, timeout=30, check_same_thread=False)
+            self.connection.execute("PRAGMA journal_mode=WAL")
+            self.connection.execute("PRAGMA synchronous=NORMAL")
+            self.connection.executescript(_SCHEMA)
+            self.connection.commit()
+        except sqlite3.DatabaseError as error:
+            raise ConfigError(f"{self.path} is not a colmo program store ({error})") from None
         # Program threads store their results as they finish: one writer at a time.
         self._lock = threading.Lock()
-        self.connection.execute("PRAGMA journal_mode=WAL")
-        self.connection.execute("PRAGMA synchronous=NORMAL")
-        self.connection.executescript(_SCHEMA)
-        self.connection.commit()
 
-    def set_meta(self, **values: Any) -> None:
-        with self.connection:
+    def set_meta(self, values: Mapping[str, Any]) -> None:
+        with self._writing():
             self.connection.executemany(
-                "INSERT OR REPLACE INTO run(name, value) VALUES (?, ?)",
-                [(name, json.dumps(value)) for name, value in values.items()],
+                "INSERT OR REPLACE INTO run(name, value) VALUES (?, ?)", [(name, json.dumps(value)) for name, value in values.items()]
             )
+
+    def set_heldout(self, sample: int, score: Optional[float]) -> None:
+        with self._writing():
+            self.connection.execute("UPDATE samples SET heldout_score = ? WHERE sample = ?", (score, sample))
 
     def meta(self) -> dict[str, Any]:
         return {name: json.loads(value) for name, value in self.connection.execute("SELECT name, value FROM run")}
 
     def add(self, record: SampleRecord) -> None:
-        row = asdict(record)
+        """Store a sample; an interrupted sample's row is replaced once it is evaluated."""
+        row = record.as_row()
         for name in _JSON_FIELDS:
             if row[name] is not None:
-                row[name] = json.dumps(row[name])
+                row[name] = json.dumps(list(row[name]))
         columns = ", ".join(row)
-        with self._lock, self.connection:
-            self.connection.execute(
-                f"INSERT INTO samples({columns}) VALUES ({', '.join('?' * len(row))})", tuple(row.values())
-            )
+        with self._writing():
+            if record.status != INTERRUPTED:
+                self.connection.execute("DELETE FROM samples WHERE sample = ? AND status = ?", (record.sample, INTERRUPTED))
+            self.connection.execute(f"INSERT INTO samples({columns}) VALUES ({', '.join('?' * len(row))})", tuple(row.values()))
+
+    @contextlib.contextmanager
+    def _writing(self) -> Iterator[None]:
+        with self._lock:
+            try:
+                with self.connection:
+                    yield
+            except sqlite3.OperationalError as error:  # a full disk, an I/O error
+                raise StoreError(f"cannot write to {self.path}: {error}") from None
 
     def records(self) -> Iterator[SampleRecord]:
         cursor = self.connection.execute("SELECT * FROM samples ORDER BY sample")
@@ -120,21 +120,118 @@ class ProgramStore:
             row = dict(zip(names, values))
             for name in _JSON_FIELDS:
                 if row[name] is not None:
-                    row[name] = json.loads(row[name])
+                    row[name] = tuple(json.loads(row[name]))
+            row["cut_short"] = bool(row["cut_short"])
             yield SampleRecord(**row)
 
     def close(self) -> None:
         self.connection.close()
 
 
-def open_for_resume(run_dir: Path, task: str) -> ProgramStore:
-    """The store of an earlier run of `task`; `ConfigError` if `run_dir` is not one."""
-    path = Path(run_dir) / STORE_FILE
+class RunLock:
+    """An exclusive lock on a run directory, held while a search writes to it."""
+
+    def __init__(self, run_dir: Path):
+        path = run_dir / LOCK_FILE
+        try:
+            self.file = open(path, "a+")
+        except OSError as error:
+            raise ConfigError(f"cannot write to the run directory {run_dir}: {error.strerror}") from None
+        try:
+            fcntl.flock(self.file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            self.file.seek(0)
+            owner = self.file.read().strip() or "another process"
+            self.file.close()
+            raise ConfigError(f"the run directory {run_dir} is in use by another colmo search (pid {owner})") from None
+        self.file.seek(0)
+        self.file.truncate()
+        self.file.write(str(os.getpid()))
+        self.file.flush()
+
+    def release(self) -> None:
+        self.file.close()
+
+
+def open_run(run_dir: Path, settings: Mapping[str, Any], resume: bool) -> tuple[ProgramStore, RunLock]:
+    """The locked store of a new run in `run_dir` (recording `settings`), or of the earlier run
+    there (whose recorded settings must equal `settings`)."""
+    path = run_dir / STORE_FILE
+    if resume:
+        if not path.is_file():
+            raise ConfigError(f"resume={run_dir} is not a colmo run directory (no {STORE_FILE} in it)")
+        if path.stat().st_size == 0:
+            raise ConfigError(f"{path} is empty: not a colmo program store")
+    else:
+        try:
+            run_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise ConfigError(f"cannot create the run directory {run_dir}: {error.strerror}") from None
+    lock = RunLock(run_dir)
+    try:
+        store = ProgramStore(path)
+        if resume:
+            check_settings(run_dir, store.meta(), settings)
+        elif store.meta():
+            raise ConfigError(f"{run_dir} already holds a colmo run; resume it with resume={run_dir}")
+        else:
+            store.set_meta(settings)
+    except BaseException:
+        lock.release()
+        raise
+    return store, lock
+
+
+def run_settings(cfg: "SearchConfig") -> dict[str, Any]:
+    """The settings a run's scores depend on; a resumed run must keep them."""
+    gfo = {f"gfo.{name}": value for name, value in asdict(cfg.gfo).items()}
+    return {"task": cfg.task.name, "seed": cfg.seed, "task.episodes": cfg.task.episodes, "task.env": cfg.task.env, **gfo}
+
+
+def check_settings(run_dir: Path, recorded: Mapping[str, Any], settings: Mapping[str, Any]) -> None:
+    """`ConfigError` naming every setting that differs from the run's (scores would not compare)."""
+    if not recorded:
+        raise ConfigError(f"{run_dir / STORE_FILE} holds no colmo run (no run settings in it)")
+    changed = sorted(name for name in settings if recorded.get(name) != settings[name])
+    if changed:
+        was = ", ".join(f"{name}={_shown(recorded.get(name))}" for name in changed)
+        now = ", ".join(f"{name}={_shown(settings[name])}" for name in changed)
+        raise ConfigError(f"resume={run_dir} was made with {was}; this command has {now}: pass the same to resume it (scores would not compare)")
+
+
+def _shown(value: Any) -> str:
+    return value if isinstance(value, str) else json.dumps(value)
+
+
+def open_for_resume(run_dir: Path, settings: Mapping[str, Any]) -> None:
+    """Check, without locking or changing anything, that `run_dir` can be resumed with `settings`."""
+    path = run_dir / STORE_FILE
     if not path.is_file():
         raise ConfigError(f"resume={run_dir} is not a colmo run directory (no {STORE_FILE} in it)")
-    store = ProgramStore(path)
-    made_with = store.meta().get("task")
-    if made_with != task:
-        store.close()
-        raise ConfigError(f"resume={run_dir} was made with task={made_with}; pass task={made_with} to resume it")
-    return store
+    if path.stat().st_size == 0:
+        raise ConfigError(f"{path} is empty: not a colmo program store")
+    try:
+        connection = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+        try:
+            rows = connection.execute("SELECT name, value FROM run").fetchall()
+        finally:
+            connection.close()
+    except sqlite3.DatabaseError as error:
+        raise ConfigError(f"{path} is not a colmo program store ({error})") from None
+    check_settings(run_dir, {name: json.loads(value) for name, value in rows}, settings)
+
+
+def write_outputs(summary: Summary, run_dir: Path) -> None:
+    """`summary.json` and the best policy as a readable `.py` file with its scores, in the run
+    directory; a file that cannot be written is logged, not fatal (the store holds everything)."""
+    try:
+        (run_dir / SUMMARY_FILE).write_text(json.dumps(summary.as_dict(), indent=2))
+        if summary.best_code:
+            heldout = f", held-out {summary.best_heldout_score:.2f}" if summary.best_heldout_score is not None else ""
+            header = (
+                f"# colmo best policy for {summary.task}: training score {summary.best_score:.2f}{heldout}"
+                f" after {summary.samples} samples\n"
+            )
+            (run_dir / BEST_POLICY_FILE).write_text(header + summary.best_code)
+    except OSError as error:
+        log.error("cannot write the run's outputs to %s: %s", run_dir, error)

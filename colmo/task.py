@@ -5,19 +5,20 @@ An `Environment` is reset with an episode seed and stepped with an action; it re
 reproducing dm_control's `control.Environment` exactly (same reset, same sub-stepping,
 same observations) without its per-step Python bookkeeping. `evaluate_policy` runs a
 policy for a list of episode seeds and returns the per-episode returns, or the reason
-it failed; it never raises for anything the policy does.
+it failed; it never raises for anything the policy does. `episode_seeds` and `heldout_seeds`
+name the training and held-out episodes of a run.
 """
 
 from __future__ import annotations
 
 import abc
 import copy
-import math
-from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Sequence
 
 import mujoco
 import numpy as np
+
+from colmo.evaluation import Evaluation, Race
 
 Policy = Callable[[np.ndarray], object]
 
@@ -123,28 +124,33 @@ class MujocoEnvironment(Environment):
                 raise PolicyFailure(f"unstable simulation: {warning.name} at time {self.data.warning[warning].lastinfo}")
 
 
-@dataclass(frozen=True)
-class Evaluation:
-    """The outcome of running one policy on a list of episode seeds."""
-
-    returns: tuple[float, ...] = ()
-    failure: str | None = None
-
-    @property
-    def score(self) -> float:
-        """Mean return; -inf for a failed evaluation, so it loses every comparison."""
-        return -math.inf if self.failure else float(np.mean(self.returns))
-
-
 def episode_seeds(seed: int, episodes: int) -> list[int]:
     """Fixed episode seeds derived from the run seed (common random numbers for every candidate)."""
     return [int(s) for s in np.random.SeedSequence(seed).generate_state(episodes)]
 
 
+def heldout_seeds(seed: int, episodes: int, training: Sequence[int]) -> list[int]:
+    """`episodes` seeds for held-out evaluation: from their own stream of the run seed, and
+    disjoint from the `training` seeds."""
+    excluded = set(training)
+    stream = np.random.SeedSequence([seed, 1]).generate_state(episodes + len(excluded))
+    return [int(s) for s in stream if int(s) not in excluded][:episodes]
+
+
+_REAL_KINDS = frozenset("biuf")  # bool, signed and unsigned integers, floats
+
+
 def as_action(raw: object, action_size: int) -> np.ndarray:
-    """The policy's output as a finite `(action_size,)` array, or `PolicyFailure` saying what is wrong."""
+    """The policy's output as a finite `(action_size,)` float array, or `PolicyFailure` saying
+    what is wrong. Only real numbers are actions: strings, bytes, complex numbers, dates and
+    arbitrary objects are refused even where numpy would convert them."""
     try:
-        action = np.asarray(raw, dtype=np.float64)
+        array = np.asarray(raw)
+        if array.dtype.kind == "O":  # a sequence mixing numbers and size-1 arrays, or arbitrary objects
+            array = np.asarray([np.asarray(item).item() if _is_real_scalar(item) else _refuse(item) for item in np.ravel(array)])
+        if array.dtype.kind not in _REAL_KINDS:
+            raise PolicyFailure(f"bad action: {array.dtype} values are not real numbers")
+        action = array.astype(np.float64)
     except (TypeError, ValueError, OverflowError) as error:
         raise PolicyFailure(f"bad action: {type(raw).__name__} is not numeric ({error})") from None
     if action.shape != (action_size,):
@@ -157,41 +163,63 @@ def as_action(raw: object, action_size: int) -> np.ndarray:
     return action
 
 
-def rollout(env: Environment, policy: Policy, seed: int, steps: int | None = None) -> float:
-    """Return of one episode; raises `PolicyFailure` with the reason if anything goes wrong."""
+def _is_real_scalar(item: object) -> bool:
+    if isinstance(item, (int, float, np.integer, np.floating, np.bool_)):
+        return True
+    return isinstance(item, np.ndarray) and item.size == 1 and item.dtype.kind in _REAL_KINDS
+
+
+def _refuse(item: object) -> float:
+    raise PolicyFailure(f"bad action: an entry of type {type(item).__name__} is not a real number")
+
+
+def act(policy: Policy, obs: np.ndarray, action_size: int, step: int) -> np.ndarray:
+    """The policy's checked action for `obs` at control step `step` of an episode; raises
+    `PolicyFailure` with the reason if the policy fails or its output is not an action."""
+    try:
+        raw = policy(obs)
+    except MemoryError as error:
+        raise PolicyFailure(f"memory: {str(error) or 'out of memory'} (step {step})") from None
+    except Exception as error:  # the policy is untrusted code: any error is its failure
+        raise PolicyFailure(f"exception: {type(error).__name__}: {error} (step {step})") from None
+    try:
+        return as_action(raw, action_size)
+    except PolicyFailure as failure:
+        raise PolicyFailure(f"{failure} (step {step})") from None
+
+
+def rollout(env: Environment, policy: Policy, seed: int, steps: int | None = None) -> tuple[float, int]:
+    """Return of one episode and the control steps it took; raises `PolicyFailure` with the
+    reason if anything goes wrong."""
     # Policies may draw from np.random (the paper's quadruped policy adds noise): seeding it per
     # episode keeps the objective a deterministic function of the parameters.
     np.random.seed(seed % 2**32)
     obs = env.reset(seed)
     total = 0.0
-    size = env.action_size
-    for step in range(steps or env.horizon):
-        try:
-            # A copy: an environment may return a view of its simulation state (`self.data.qpos`),
-            # which a policy writing to its `obs` would otherwise change.
-            raw = policy(obs.copy())
-        except MemoryError as error:
-            raise PolicyFailure(f"memory: {str(error) or 'out of memory'} (step {step})") from None
-        except Exception as error:  # the policy is untrusted code: any error is its failure
-            raise PolicyFailure(f"exception: {type(error).__name__}: {error} (step {step})") from None
-        try:
-            action = as_action(raw, size)
-        except PolicyFailure as failure:
-            raise PolicyFailure(f"{failure} (step {step})") from None
-        reward, obs = env.step(action)
+    horizon = steps or env.horizon
+    for step in range(horizon):
+        # A copy: an environment may return a view of its simulation state (`self.data.qpos`),
+        # which a policy writing to its `obs` would otherwise change.
+        reward, obs = env.step(act(policy, obs.copy(), env.action_size, step))
         total += reward
     env.check_episode()
-    return total
+    return total, horizon
 
 
-def evaluate_policy(env: Environment, policy: Policy, seeds: list[int], steps: int | None = None) -> Evaluation:
-    """Mean-return evaluation over `seeds`; a failure in any episode fails the whole evaluation."""
-    returns = []
+def evaluate_policy(env: Environment, policy: Policy, seeds: Sequence[int], steps: int | None = None, race: Race | None = None) -> Evaluation:
+    """Mean-return evaluation over `seeds`, in order; a failure in any episode fails the whole
+    evaluation; with `race`, the episodes stop once the candidate gives up (`Race.gives_up`)."""
+    returns: list[float] = []
+    simulated = 0
     for seed in seeds:
         try:
-            returns.append(rollout(env, policy, seed, steps))
+            episode_return, episode_steps = rollout(env, policy, seed, steps)
         except PolicyFailure as failure:
-            return Evaluation(tuple(returns), str(failure))
+            return Evaluation(tuple(returns), str(failure), simulated)
         except RecursionError:
-            return Evaluation(tuple(returns), "exception: RecursionError: maximum recursion depth exceeded")
-    return Evaluation(tuple(returns))
+            return Evaluation(tuple(returns), "exception: RecursionError: maximum recursion depth exceeded", simulated)
+        returns.append(episode_return)
+        simulated += episode_steps
+        if race is not None and race.gives_up(returns):
+            return Evaluation(tuple(returns), None, simulated, raced_out=True)
+    return Evaluation(tuple(returns), None, simulated)

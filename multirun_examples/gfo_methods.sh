@@ -3,6 +3,6 @@
 # differential evolution, and Optuna's TPE (Bayesian optimization), budget 100 each, two seeds.
 #
 #   multirun_examples/gfo_methods.sh [task=...] [more overrides]
-#   python -m colmo.report experiment=pendulum
+#   colmo-report experiment=pendulum
 set -euo pipefail
-exec python -m colmo -m task=pendulum gfo=oneplusone,cma,de,bo seed=0,1 search.max_samples=200 "$@"
+exec colmo -m task=pendulum gfo=oneplusone,cma,de,bo seed=0,1 search.max_samples=200 "$@"

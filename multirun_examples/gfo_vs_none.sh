@@ -5,6 +5,6 @@
 #
 #   multirun_examples/gfo_vs_none.sh                    # pendulum
 #   multirun_examples/gfo_vs_none.sh task=cheetah       # any task; later overrides win
-#   python -m colmo.report experiment=pendulum          # then: Table I, Fig. 4, best policies
+#   colmo-report experiment=pendulum          # then: Table I, Fig. 4, best policies
 set -euo pipefail
-exec python -m colmo -m task=pendulum gfo=none,oneplusone seed=0,1,2 search.max_samples=200 "$@"
+exec colmo -m task=pendulum gfo=none,oneplusone seed=0,1,2 search.max_samples=200 "$@"

@@ -20,6 +20,29 @@ if "MENAGERIE_ROOT" not in os.environ and _MENAGERIE.is_dir():
     os.environ["MENAGERIE_ROOT"] = str(_MENAGERIE)
 
 
+_STARTED: list[subprocess.Popen] = []
+
+
+def start_colmo(module: str, *overrides: str, cwd: Path, **popen) -> subprocess.Popen:
+    """Start `python -m <module> <overrides>` in `cwd` (text pipes); a process a test leaves
+    running is killed when the test ends, failed or not."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", module, *overrides], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **popen
+    )
+    _STARTED.append(process)
+    return process
+
+
+@pytest.fixture(autouse=True)
+def no_process_left_behind():
+    yield
+    while _STARTED:
+        process = _STARTED.pop()
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+
+
 def run_colmo(module: str, *overrides: str, cwd: Path, timeout: float = 300) -> subprocess.CompletedProcess:
     """Run `python -m <module> <overrides>` as a user would, in `cwd`."""
     return subprocess.run(
@@ -38,14 +61,9 @@ def examples() -> Path:
 
 def compose(config_name: str, *overrides: str):
     """A config composed from colmo's bundled configs, as validated dataclasses."""
-    from hydra import compose as hydra_compose
-    from hydra import initialize_config_module
+    from colmo.cli import compose as compose_config
 
-    from colmo.config import CONFIG_MODULE, register_schemas, to_objects
-
-    register_schemas()
-    with initialize_config_module(config_module=CONFIG_MODULE, version_base="1.3"):
-        return to_objects(hydra_compose(config_name=config_name, overrides=list(overrides)))
+    return compose_config(config_name, list(overrides))
 
 
 class FakeOpenAIServer:
@@ -114,3 +132,31 @@ def completion(body: dict, n: int, content: str | None) -> dict:
         "id": "chatcmpl-test", "object": "chat.completion", "created": int(time.time()), "model": body["model"],
         "choices": choices, "usage": {"prompt_tokens": 10, "completion_tokens": 5 * n, "total_tokens": 10 + 5 * n},
     }
+
+
+def wait_for(condition, timeout: float = 120.0, interval: float = 0.01, what: str = "a condition"):
+    """Poll `condition()` until it returns something true; fail after `timeout` seconds (generous:
+    CI shares 2 cores)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = condition()
+        if value:
+            return value
+        time.sleep(interval)
+    raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
+
+
+def children_of(pid: int) -> list[int]:
+    """The child processes of `pid` (a sandbox worker's evaluation processes)."""
+    children = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        try:
+            children += [int(child) for child in (task / "children").read_text().split()]
+        except OSError:
+            pass
+    return children
+
+
+def same_outcome(a, b) -> bool:
+    """Two evaluations with the same returns, failure and steps (their timings differ)."""
+    return (a.returns, a.failure, a.steps, a.raced_out) == (b.returns, b.failure, b.steps, b.raced_out)

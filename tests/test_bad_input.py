@@ -4,7 +4,6 @@ The README's bad-input table is this test's cases and the messages they print.
 """
 
 import pytest
-
 from conftest import run_colmo
 
 SPEC_WITH_SYNTAX_ERROR = '"""A task."""\ndef make_environment(:\n'

@@ -1,14 +1,17 @@
 """A sandbox worker killed from outside (SIGKILL) costs no evaluation: the request is retried
 on a fresh worker, and the search around it goes on with every program present once."""
 
+import concurrent.futures
 import os
 import signal
 import threading
 import time
 
-from conftest import EXAMPLES, compose
+from conftest import EXAMPLES, children_of, compose, same_outcome, wait_for
+
+from colmo.evaluation import EvalRequest
+from colmo.executor import LocalExecutor
 from colmo.program import parametrize
-from colmo.sandbox import EvalRequest, WorkerPool
 from colmo.search import Search
 from colmo.spec import load_spec
 from colmo.store import ProgramStore
@@ -17,44 +20,43 @@ from colmo.store import ProgramStore
 def paper_request(episodes: int) -> EvalRequest:
     spec = load_spec("pendulum.py")
     program = parametrize((EXAMPLES / "paper_pendulum.py").read_text())
-    return EvalRequest(str(spec.path), (), tuple(range(episodes)), program.skeleton, program.values, spec.allowed_imports)
+    return EvalRequest(str(spec.path), (), tuple(range(episodes)), program.skeleton, program.values, spec.allowed_imports, timeout_s=120)
 
 
-def kill_busy_worker(pool: WorkerPool, index: int = 0, after: float = 0.3) -> int:
-    time.sleep(after)
-    pid = pool.workers[index].process.pid
+def kill_worker_mid_evaluation(executor: LocalExecutor) -> int:
+    """Kill the worker once it has started an evaluation (it has forked an evaluation process)."""
+    pid = wait_for(lambda: next((p for p in executor.worker_pids() if children_of(p)), None), what="an evaluation in progress")
     os.kill(pid, signal.SIGKILL)
     return pid
 
 
 def test_a_killed_worker_costs_no_evaluation():
     request = paper_request(episodes=40)
-    with WorkerPool(1, timeout_s=60, memory_mb=1024) as pool:
-        expected = pool.evaluate([request])[0]
-        future = pool.submit(request)
-        killed = kill_busy_worker(pool)
-        result = future.result()
-        assert pool.workers[0].process.pid != killed  # a fresh worker took over
-    assert result == expected and result.failure is None
+    with LocalExecutor(1, memory_mb=1024) as executor, concurrent.futures.ThreadPoolExecutor(1) as threads:
+        expected = executor.evaluate([request])[0]
+        future = threads.submit(executor.evaluate, [request])
+        killed = kill_worker_mid_evaluation(executor)
+        [result] = future.result()
+        assert executor.worker_pids() and killed not in executor.worker_pids()  # a fresh worker took over
+    assert same_outcome(result, expected) and result.failure is None
 
 
 def test_a_request_that_keeps_losing_its_worker_fails_with_the_reason():
     request = paper_request(episodes=40)
-    with WorkerPool(1, timeout_s=60, memory_mb=1024) as pool:
-        pool.evaluate([paper_request(episodes=1)])  # a worker is up
-        future = pool.submit(request)
-        kill_busy_worker(pool)
-        while pool.workers[0] is None or pool.workers[0].process.pid is None:
-            time.sleep(0.01)
-        kill_busy_worker(pool, after=0.5)
-        result = future.result()
-    assert result.failure.startswith("crash: the worker was killed (SIGKILL)")
+    with LocalExecutor(1, memory_mb=1024, max_retries=1) as executor, concurrent.futures.ThreadPoolExecutor(1) as threads:
+        executor.evaluate([paper_request(episodes=1)])  # a worker is up
+        future = threads.submit(executor.evaluate, [request])
+        first = kill_worker_mid_evaluation(executor)
+        wait_for(lambda: [p for p in executor.worker_pids() if p != first and children_of(p)], what="the retry")
+        kill_worker_mid_evaluation(executor)
+        [result] = future.result()
+    assert result.failure.startswith("lost worker: the worker was killed (SIGKILL)") and result.failure.endswith("after 1 retries")
 
 
 def test_search_survives_workers_killed_at_random_moments(tmp_path):
     cfg = compose(
         "search", "search.max_samples=16", "gfo.budget=6", "task.episodes=3", "tracker=none",
-        "executor.workers=2", "search.progress=false",
+        "executor.workers=2", "search.progress=false", "evaluation.episodes=3", "evaluation.render=false", "evaluation.simplify=false",
     )
     search = Search(cfg, tmp_path)
     killed = []
@@ -62,10 +64,10 @@ def test_search_survives_workers_killed_at_random_moments(tmp_path):
     def killer():
         for delay in (1.0, 1.5, 2.0):
             time.sleep(delay)
-            busy = [w for w in search.pool.workers if w is not None and w.process.poll() is None]
+            busy = [pid for pid in search.executor.worker_pids() if children_of(pid)]
             if busy:
-                os.kill(busy[0].process.pid, signal.SIGKILL)
-                killed.append(busy[0].process.pid)
+                os.kill(busy[0], signal.SIGKILL)
+                killed.append(busy[0])
 
     thread = threading.Thread(target=killer)
     thread.start()
@@ -75,5 +77,5 @@ def test_search_survives_workers_killed_at_random_moments(tmp_path):
     store = ProgramStore(tmp_path / "programs.db")
     records = [r for r in store.records() if r.sample >= 0]
     store.close()
-    assert [r.sample for r in records] == list(range(16)) and summary["samples"] == 16
-    assert not [r.failure for r in records if r.failure and "killed" in r.failure]
+    assert [r.sample for r in records] == list(range(16)) and summary.samples == 16
+    assert not [r.failure for r in records if r.failure and ("killed" in r.failure or "lost" in r.failure)]

@@ -324,3 +324,145 @@ def test_extraction_error_is_a_value_error():
 def test_deeply_nested_answer_is_an_extraction_error_not_a_crash():
     with pytest.raises(ExtractionError, match="nested too deeply"):
         extract_policy("def policy(obs):\n    return " + "-" * 100000 + "1\n")
+
+
+# ------------------------------------------------------------- completions of the prompt text
+
+def completion_prompt() -> str:
+    """The prompt text a completion model continues (`prompt_format=completion`): two
+    versions, a helper, and the header of policy_v2."""
+    from colmo.database import Selection, StoredProgram
+    from colmo.prompt import build_prompt
+
+    helper = "import numpy as np\n\ndef angle(obs):\n    return np.arctan2(obs[1], obs[0])\n\ndef policy(obs):\n    return -2.0 * angle(obs)"
+    programs = [StoredProgram("a", "def policy(obs):\n    return 0.0", 0.0, 0, 0), StoredProgram("b", helper, 1.0, 0, 1)]
+    return build_prompt("Swing the pole up.", Selection(0, programs)).text
+
+
+BODY = "    x = angle(obs)\n    return np.clip(-3.0 * x - 0.5 * obs[2], -1.0, 1.0)\n"
+
+
+def as_chat_answer(prefix: str, body: str) -> str:
+    """The same function written out whole, as a chat model answers."""
+    header = prefix[prefix.rindex("def policy_v2") :]
+    return f"```python\nimport numpy as np\n\ndef angle(obs):\n    return np.arctan2(obs[1], obs[0])\n\n{header}{body}```"
+
+
+@pytest.mark.parametrize("completion", [
+    BODY,
+    BODY + "\n\n",
+    BODY + '\n\ndef policy_v3(obs):\n    """Improved version of policy_v2."""\n    x = np.arctan2(obs[1],',  # cut by max_tokens
+    BODY + "\n\ndef policy_v3(obs",
+    BODY + "\n\nThis policy damps the swing.",
+])
+def test_a_completion_body_extracts_to_the_same_program_as_the_whole_function(completion):
+    prefix = completion_prompt()
+    assert prefix.endswith('def policy_v2(obs):\n    """Improved version of policy_v1."""\n')
+    expected = extract_policy(as_chat_answer(prefix, BODY))
+    assert extract_policy(completion, prefix=prefix) == expected
+    assert expected == (
+        "import numpy as np\n\ndef angle(obs):\n    return np.arctan2(obs[1], obs[0])\n\n"
+        'def policy(obs):\n    """Improved version of policy_v1."""\n    x = angle(obs)\n'
+        "    return np.clip(-3.0 * x - 0.5 * obs[2], -1.0, 1.0)"
+    )
+
+
+def test_a_completion_with_its_own_docstring_and_a_truncated_last_line():
+    prefix = completion_prompt()
+    completion = '    """Pumps energy, then balances."""\n    x = angle(obs)\n    return -3.0 * x\n    y = np.clip(x,'
+    extracted = extract_policy(completion, prefix=prefix)
+    assert extracted.endswith('"""Improved version of policy_v1."""\n    \'Pumps energy, then balances.\'\n    x = angle(obs)\n    return -3.0 * x')
+
+
+def test_a_newer_version_the_completion_wrote_after_its_body_wins():
+    completion = BODY + '\n\ndef policy_v3(obs):\n    """Improved version of policy_v2."""\n    return 0.5 * policy_v2(obs)\n'
+    extracted = extract_policy(completion, prefix=completion_prompt())
+    assert "def policy(obs):" in extracted and "return 0.5 * policy_v2(obs)" in extracted
+    assert "def policy_v2(obs):" in extracted  # the version it calls comes along
+
+
+@pytest.mark.parametrize("completion", ["", "\n", "    x = (obs[0] +* 2)\n    return x\n", "I cannot help with that."])
+def test_a_completion_without_a_usable_body_never_falls_back_to_a_prompt_version(completion):
+    with pytest.raises(ExtractionError, match="the completion holds no complete body of 'policy'"):
+        extract_policy(completion, prefix=completion_prompt())
+
+
+# ------------------------------------------------------------------------- math module names
+
+def test_math_names_used_unbound_are_imported_from_math():
+    text = "def policy(obs):\n    return sqrt(abs(obs[0])) * pi - exp(-obs[2])"
+    assert extract_policy(text) == "from math import exp, pi, sqrt\n\ndef policy(obs):\n    return sqrt(abs(obs[0])) * pi - exp(-obs[2])"
+
+
+def test_names_the_program_binds_itself_are_not_taken_from_math():
+    text = "def policy(obs, e=1.0):\n    pi = 3.0\n    for tau in range(2):\n        pi += tau\n    return pi * e * obs[0]"
+    assert extract_policy(text).startswith("def policy(obs, e=1.0):")
+
+
+# ---------------------------------------------- answers Qwen2.5-Coder-1.5B-Instruct really wrote
+
+REAL_ANSWERS = [
+    # It copies the task description into a module docstring, then writes `policy`.
+    answer('''
+        ```python
+        """Improved pendulum swing-up policy.
+
+        Observation (size 3): [cos(theta), sin(theta), angular velocity], where theta is the pole's
+        angle from upright (theta = 0 is upright). Action: one torque in [-1, 1] (values outside are
+        clipped).
+
+        On every iteration, improve policy_v0 over the policy_vX methods from previous iterations.
+        """
+
+        import numpy as np
+
+
+        def policy(obs):
+            # Define deadzone parameters
+            deadzone = 0.1
+            theta, _, omega = obs
+            if np.abs(theta) < deadzone or abs(omega) < deadzone:
+                return 1.0 - deadzone / (abs(omega) + np.sign(omega))
+            return np.clip(4 * np.sin(theta) - omega, -1, 1)
+        ```'''),
+    # It uses `sqrt` without importing it (the sandbox once failed it with a NameError).
+    answer('''
+        ```python
+        def policy(obs):
+            """Final version of policy."""
+            theta = obs[0]
+            if abs(theta) > 1.57:  # Check if the pole is in a dangerous position
+                return -1.0
+            action = sqrt(8.32 * abs(theta) / (2.46 + sqrt(2.83)))
+            return action
+        ```'''),
+    # It repeats a prompt version, then writes its own as `policy`, and ends with a stub.
+    answer('''
+        ```python
+        import numpy as np
+        from math import pi, sqrt
+
+
+        def policy_v0(obs):
+            theta, sin_theta, angular_velocity = obs
+            return (np.abs(theta) < 1.039) * 0.5939
+
+
+        def policy(obs):
+            """Final improved version of policy."""
+            theta, sin_theta, angular_velocity = obs
+            return -sqrt(20.28 * abs(theta) / (1.716 + sqrt(2.46)))
+
+        def policy_vX(obs):
+            # Your previous policy_vX function goes here
+            pass
+        ```'''),
+]
+
+
+def test_answers_a_small_model_really_wrote():
+    copied, sqrt_unbound, several = (extract_policy(text) for text in REAL_ANSWERS)
+    assert copied.startswith("import numpy as np\n\ndef policy(obs):\n    deadzone = 0.1") and "Observation" not in copied
+    assert sqrt_unbound.startswith("from math import sqrt\n\ndef policy(obs):")
+    # `policy_vX` is no version name: the stub after `policy` is dropped with the other unused code.
+    assert several == "from math import pi, sqrt\n\ndef policy(obs):\n    \"\"\"Final improved version of policy.\"\"\"\n    theta, sin_theta, angular_velocity = obs\n    return -sqrt(20.28 * abs(theta) / (1.716 + sqrt(2.46)))"

@@ -1,32 +1,42 @@
 """Generators: the mutate baseline's children, the OpenAI client against a real local HTTP server
-speaking the chat-completions protocol, and the vLLM wiring through a fake `vllm` module."""
+speaking the chat-completions and completions protocols, and the vLLM and llama.cpp wiring
+through fake `vllm` and `llama_cpp` modules (tests/test_llm.py runs a real model)."""
 
 from __future__ import annotations
 
 import ast
+import json
 import logging
 import re
 import socket
 import sys
+import threading
 import time
 import types
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES, FakeOpenAIServer, run_colmo
 
-from colmo.generate import mutate
-from colmo.config import ConfigError, GeneratorConfig, MutateConfig, OpenAIConfig, VLLMConfig
-from colmo.generate import GENERATORS, Generation, GeneratorError, MutateGenerator, make_generator
+from colmo.config import GeneratorConfig, LlamaCppConfig, MutateConfig, OpenAIConfig, VLLMConfig
+from colmo.errors import ConfigError
+from colmo.evaluation import EvalRequest, Evaluator
+from colmo.executor import LocalExecutor
+from colmo.extract import extract_policy
+from colmo.generate import GENERATORS, Generation, GeneratorError, make_generator
+from colmo.generate.mutate import MutateGenerator
+from colmo.generate.probe import ProgramProbe
 from colmo.program import parametrize
-from colmo.prompt import Prompt
-from colmo.sandbox import EvalRequest, ProgramProbe, WorkerPool
+from colmo.prompt import COMPLETION_STOP, Prompt
 from colmo.spec import load_spec
-
-from conftest import EXAMPLES, FakeOpenAIServer
 
 STARTER = load_spec("pendulum.py").starter_code
 PAPER_PENDULUM = (EXAMPLES / "paper_pendulum.py").read_text()
 MESSAGES = [{"role": "system", "content": "You write policies."}, {"role": "user", "content": "Improve policy_v1."}]
+
+
+PROMPT_TEXT = 'import numpy as np\n\n\ndef policy_v0(obs):\n    return 0.0\n\n\ndef policy_v1(obs):\n    """Improved version of policy_v0."""\n'
 
 
 def make_prompt(*programs: str, text: str = "") -> Prompt:
@@ -35,14 +45,14 @@ def make_prompt(*programs: str, text: str = "") -> Prompt:
 
 @pytest.fixture(scope="module")
 def pendulum_probe():
-    probe = ProgramProbe(load_spec("pendulum.py"), {}, seed=0, timeout_s=3, memory_mb=1024)
+    probe = ProgramProbe(Evaluator.for_task(load_spec("pendulum.py"), {}, [0], memory_mb=1024, timeout_s=3))
     yield probe
     probe.close()
 
 
 @pytest.fixture(scope="module")
 def cheetah_probe():
-    probe = ProgramProbe(load_spec("cheetah.py"), {}, seed=0, timeout_s=3, memory_mb=1024)
+    probe = ProgramProbe(Evaluator.for_task(load_spec("cheetah.py"), {}, [0], memory_mb=1024, timeout_s=3))
     yield probe
     probe.close()
 
@@ -71,12 +81,12 @@ def test_mutate_children_parse_run_and_differ_from_their_parents(pendulum_probe)
         assert any(isinstance(n, ast.Return) and n.value is not None for n in ast.walk(fn))
     # Whole episodes in the sandbox, on an episode seed the probe never saw.
     spec = load_spec("pendulum.py")
-    with WorkerPool(1, timeout_s=30, memory_mb=1024) as pool:
+    with LocalExecutor(1, memory_mb=1024) as executor:
         requests = [
-            EvalRequest(str(spec.path), (), (12345,), p.skeleton, p.values, spec.allowed_imports)
+            EvalRequest(str(spec.path), (), (12345,), p.skeleton, p.values, spec.allowed_imports, timeout_s=30)
             for p in map(parametrize, (c.text for c in children))
         ]
-        failures = [e.failure for e in pool.evaluate(requests) if e.failure]
+        failures = [e.failure for e in executor.evaluate(requests) if e.failure]
     assert len(failures) <= 2, failures  # measured: 0 of 200
 
     keys = [parametrize(c.text).key for c in children]
@@ -131,9 +141,8 @@ def test_children_of_a_program_without_numpy_import_it(pendulum_probe):
     assert all(run_on_zeros(g.text, 3).shape == () for g in children)
 
 
-def test_without_a_new_structure_a_child_is_its_parent_with_perturbed_constants(monkeypatch):
-    monkeypatch.setattr(mutate, "_ATTEMPTS", 0)
-    [child] = MutateGenerator(MutateConfig(), seed=0).generate(make_prompt(PAPER_PENDULUM), 1)
+def test_without_a_new_structure_a_child_is_its_parent_with_perturbed_constants():
+    [child] = MutateGenerator(MutateConfig(attempts=0), seed=0).generate(make_prompt(PAPER_PENDULUM), 1)
     parent = parametrize(PAPER_PENDULUM)
     program = parametrize(child.text)
     assert program.key == parent.key
@@ -148,12 +157,10 @@ def test_mutate_skips_programs_it_cannot_parse():
 
 
 def test_the_probe_passes_only_programs_that_run_on_the_task(pendulum_probe):
-    start = time.perf_counter()
-    assert not pendulum_probe("def policy(obs):\n    while True:\n        pass\n")  # its worker is replaced
-    assert time.perf_counter() - start < 10
+    assert not pendulum_probe("def policy(obs):\n    while True:\n        pass\n")  # its 3 s limit ends it
     assert not pendulum_probe("def policy(obs):\n    return obs[:2]\n")  # two actions for one actuator
     assert not pendulum_probe("def policy(obs):\n    return float('nan')\n")
-    assert not pendulum_probe("import os\ndef policy(obs):\n    return 0.0\n")
+    assert not pendulum_probe("import os\ndef policy(obs):\n    return float(os.getpid() % 2)\n")
     assert not pendulum_probe("def policy(obs) return")
     assert pendulum_probe(PAPER_PENDULUM)
 
@@ -209,7 +216,7 @@ def test_openai_asks_for_the_batch_in_one_request_when_n_is_honoured(server):
 def test_openai_falls_back_to_parallel_single_requests_when_n_is_ignored():
     fake = FakeOpenAIServer(honour_n=False, delay=0.3)
     try:
-        generator = make_generator(openai_config(fake.url), seed=0)
+        generator = make_generator(openai_config(fake.url, max_concurrency=4), seed=0)
         assert len(generator.generate(make_prompt(STARTER), 4)) == 4
         assert [r["body"].get("n") for r in fake.requests] == [4, None, None, None]
         assert fake.max_active >= 2  # the three missing completions were asked for at once
@@ -260,8 +267,9 @@ def test_openai_drops_a_request_that_runs_out_of_retries(server, caplog):
     assert any("dropping a request after 2 attempts" in r.getMessage() for r in caplog.records)
 
 
-def test_openai_gives_up_after_consecutive_failures(dead_url):
-    generator = make_generator(openai_config(dead_url, max_retries=10, max_consecutive_failures=3), seed=0)
+def test_openai_gives_up_after_consecutive_failures(server):
+    generator = make_generator(openai_config(server.url, max_retries=10, max_consecutive_failures=3), seed=0)
+    server.close()  # the server answered the start-up check, then went away
     with pytest.raises(GeneratorError) as raised:
         generator.generate(make_prompt(STARTER), 4)
     generator.close()
@@ -300,6 +308,148 @@ def test_openai_reads_the_api_key_from_the_named_variable(server, monkeypatch):
     assert [r["authorization"] for r in server.requests] == ["Bearer sk-colmo-test", "Bearer EMPTY"]
 
 
+def test_openai_sends_no_more_than_max_concurrency_requests_to_a_server_and_queues_the_rest_here(caplog):
+    # Six requests of 0.5 s each to a one-slot server take 3 s, longer than the 2 s timeout:
+    # only a request waiting in the server's queue would time out, and none waits there.
+    fake = FakeOpenAIServer(honour_n=False, delay=0.5)
+    try:
+        generator = make_generator(openai_config(fake.url, batch_size=6, timeout_s=2.0, max_concurrency=1), seed=0)
+        with caplog.at_level(logging.WARNING, logger="colmo.generate"):
+            assert len(generator.generate(make_prompt(STARTER), 6)) == 6
+        generator.close()
+        assert fake.max_active == 1 and len(fake.requests) == 6
+        assert not [r.getMessage() for r in caplog.records if "retry" in r.getMessage() or "dropping" in r.getMessage()]
+    finally:
+        fake.close()
+
+
+def test_openai_cancel_sends_none_of_the_queued_requests():
+    fake = FakeOpenAIServer(honour_n=False, delay=2.0)
+    try:
+        generator = make_generator(openai_config(fake.url, batch_size=4, use_n=False, max_concurrency=1), seed=0)
+        result: list = []
+        thread = threading.Thread(target=lambda: result.append(generator.generate(make_prompt(STARTER), 4)))
+        thread.start()
+        deadline = time.monotonic() + 60
+        while not fake.requests:
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        generator.cancel()
+        thread.join(timeout=60)
+        assert not thread.is_alive()
+        assert len(fake.requests) == 1 and len(result[0]) == 1  # the one in flight ends on its own
+        generator.close()
+    finally:
+        fake.close()
+
+
+def test_openai_concurrency_limit_is_per_server():
+    fakes = [FakeOpenAIServer(honour_n=False, delay=0.3) for _ in range(2)]
+    try:
+        generator = make_generator(openai_config(*(f.url for f in fakes), batch_size=8, use_n=False, max_concurrency=2), seed=0)
+        assert len(generator.generate(make_prompt(STARTER), 8)) == 8
+        generator.close()
+        assert [f.max_active <= 2 for f in fakes] == [True, True]
+        assert sum(len(f.requests) for f in fakes) == 8 and all(f.requests for f in fakes)
+    finally:
+        for fake in fakes:
+            fake.close()
+
+
+@pytest.mark.parametrize("value, urls", [
+    ("http://127.0.0.1:8000/v1", ("http://127.0.0.1:8000/v1",)),
+    (["http://a:1/v1", "https://b:2/v1"], ("http://a:1/v1", "https://b:2/v1")),
+])
+def test_base_url_is_one_url_or_a_list(value, urls):
+    assert OpenAIConfig(base_url=value).base_url == urls
+
+
+@pytest.mark.parametrize("value, message", [
+    ([], "llm.base_url needs at least one URL"),
+    ("localhost:8000", "is not an http(s) URL"),
+    (8000, "llm.base_url must be one URL or a list of URLs"),
+    ([1, 2], "llm.base_url must be one URL or a list of URLs"),
+])
+def test_a_bad_base_url_is_a_config_error(value, message):
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        OpenAIConfig(base_url=value)
+
+
+@pytest.mark.parametrize("base_url", ["{url}", "[{url},{url}]"])
+def test_base_url_on_the_command_line_as_one_url_or_a_list(tmp_path, server, base_url):
+    result = run_colmo(
+        "colmo", "task=pendulum", "llm=openai", f"llm.base_url={base_url.format(url=server.url)}", "llm.model=test-model",
+        "llm.batch_size=2", "search.max_samples=2", "gfo=none", "task.episodes=1", "executor.workers=1", "tracker=none",
+        "search.progress=false", f"hydra.run.dir={tmp_path}", cwd=tmp_path,
+    )
+    assert result.returncode == 0, result.stderr
+    assert "after 2 samples" in result.stdout
+    assert server.requests and all(r["path"] == "/v1/chat/completions" for r in server.requests)
+
+
+class CompletionsServer:
+    """A local server answering `/v1/completions` with the body of a policy, as a code model
+    continuing the prompt text would; `n` is honoured."""
+
+    def __init__(self):
+        self.requests: list[dict] = []
+        owner = self
+
+        class Handler(BaseHTTPRequestHandler):
+            def log_message(self, *args):
+                pass
+
+            def do_POST(self):
+                body = json.loads(self.rfile.read(int(self.headers["Content-Length"])))
+                owner.requests.append({"path": self.path, "body": body})
+                choices = [
+                    {"index": i, "text": f"    return {i}.0 * obs[0]\n", "finish_reason": "stop", "logprobs": None}
+                    for i in range(body.get("n", 1))
+                ]
+                data = json.dumps({
+                    "id": "cmpl-test", "object": "text_completion", "created": int(time.time()), "model": body["model"],
+                    "choices": choices, "usage": {"prompt_tokens": 30, "completion_tokens": 4 * len(choices), "total_tokens": 0},
+                }).encode()
+                self.send_response(200)
+                self.send_header("Content-Type", "application/json")
+                self.send_header("Content-Length", str(len(data)))
+                self.end_headers()
+                self.wfile.write(data)
+
+        self._server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+        threading.Thread(target=self._server.serve_forever, kwargs={"poll_interval": 0.01}, daemon=True).start()
+        self.url = f"http://127.0.0.1:{self._server.server_address[1]}/v1"
+
+    def close(self) -> None:
+        self._server.shutdown()
+        self._server.server_close()
+
+
+def test_openai_completion_form_continues_the_prompt_text():
+    fake = CompletionsServer()
+    try:
+        generator = make_generator(openai_config(fake.url, prompt_format="completion"), seed=0)
+        generations = generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 3)
+        generator.close()
+    finally:
+        fake.close()
+    [request] = fake.requests
+    assert request["path"] == "/v1/completions"
+    assert request["body"]["prompt"] == PROMPT_TEXT and request["body"]["stop"] == list(COMPLETION_STOP)
+    assert request["body"]["n"] == 3 and "messages" not in request["body"]
+    assert [g.text for g in generations] == [f"    return {i}.0 * obs[0]\n" for i in range(3)]
+    assert {g.prefix for g in generations} == {PROMPT_TEXT}
+    assert [g.completion_tokens for g in generations] == [4, 4, 4]
+    extracted = extract_policy(generations[2].text, prefix=generations[2].prefix)
+    assert extracted == 'def policy(obs):\n    """Improved version of policy_v0."""\n    return 2.0 * obs[0]'
+
+
+def test_chat_generations_continue_nothing(server):
+    generator = make_generator(openai_config(server.url), seed=0)
+    assert {g.prefix for g in generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 2)} == {""}
+    generator.close()
+
+
 # ------------------------------------------------------------------- vllm: a fake vllm module
 
 class FakeLLM:
@@ -312,6 +462,9 @@ class FakeLLM:
         self.kwargs = kwargs
         self.calls: list[tuple] = []
         FakeLLM.instances.append(self)
+
+    def generate(self, prompts, sampling_params=None, use_tqdm=True):
+        return self.chat(prompts[0], sampling_params, use_tqdm)
 
     def chat(self, messages, sampling_params=None, use_tqdm=True):
         self.calls.append((messages, sampling_params, use_tqdm))
@@ -327,14 +480,20 @@ class FakeSamplingParams:
         self.__dict__.update(kwargs)
 
 
+def install_fake_module(monkeypatch, name: str, engine: type, **attributes) -> types.ModuleType:
+    """A stand-in for an optional engine package (`vllm`, `llama_cpp`), importable by that name
+    for the test, with `engine` as its model class, reset to no instances and no failure."""
+    module = types.ModuleType(name)
+    for attribute, value in attributes.items():
+        setattr(module, attribute, value)
+    monkeypatch.setitem(sys.modules, name, module)
+    engine.instances, engine.fail_with = [], None
+    return module
+
+
 @pytest.fixture
 def fake_vllm(monkeypatch):
-    module = types.ModuleType("vllm")
-    module.LLM = FakeLLM
-    module.SamplingParams = FakeSamplingParams
-    monkeypatch.setitem(sys.modules, "vllm", module)
-    FakeLLM.instances, FakeLLM.fail_with = [], None
-    return module
+    return install_fake_module(monkeypatch, "vllm", FakeLLM, LLM=FakeLLM, SamplingParams=FakeSamplingParams)
 
 
 def test_vllm_builds_the_engine_from_the_config_and_samples_the_batch_in_one_chat_request(fake_vllm):
@@ -363,6 +522,14 @@ def test_vllm_builds_the_engine_from_the_config_and_samples_the_batch_in_one_cha
     assert [g.completion_tokens for g in generations] == [3, 4, 5]
 
 
+def test_vllm_completion_form_continues_the_prompt_text(fake_vllm):
+    generator = make_generator(VLLMConfig(batch_size=2, prompt_format="completion"), seed=0)
+    generations = generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 2)
+    [(prompt, params, _)] = FakeLLM.instances[0].calls
+    assert prompt == PROMPT_TEXT and params.stop == list(COMPLETION_STOP) and params.n == 2
+    assert {g.prefix for g in generations} == {PROMPT_TEXT}
+
+
 def test_vllm_missing_or_failing_is_a_generator_error(fake_vllm, monkeypatch):
     FakeLLM.fail_with = RuntimeError("CUDA out of memory\nlong traceback")
     with pytest.raises(GeneratorError, match=r"^vLLM could not load .*: RuntimeError: CUDA out of memory$"):
@@ -372,12 +539,139 @@ def test_vllm_missing_or_failing_is_a_generator_error(fake_vllm, monkeypatch):
         make_generator(VLLMConfig(), seed=0)
 
 
+# ---------------------------------------------------------- llamacpp: a fake llama_cpp module
+
+class FakeLlama:
+    instances: list[FakeLlama] = []
+    fail_with: Exception | None = None
+    END_OF_TEXT = 7
+
+    def __init__(self, **kwargs):
+        if FakeLlama.fail_with:
+            raise FakeLlama.fail_with
+        self.kwargs = kwargs
+        self.calls: list[dict] = []
+        self.closed = False
+        FakeLlama.instances.append(self)
+
+    @classmethod
+    def from_pretrained(cls, repo_id, filename, **kwargs):
+        return cls(repo_id=repo_id, filename=filename, **kwargs)
+
+    def create_chat_completion(self, messages, **sampling):
+        self.calls.append({"messages": messages, **sampling})
+        answer = {"message": {"role": "assistant", "content": f"def policy(obs):\n    return {len(self.calls)}.0"}}
+        return {"choices": [answer], "usage": {"prompt_tokens": 40, "completion_tokens": 7}}
+
+    def create_completion(self, prompt, **sampling):
+        self.calls.append({"prompt": prompt, **sampling})
+        return {"choices": [{"text": "    return obs[0]\n"}], "usage": {"prompt_tokens": 50, "completion_tokens": 5}}
+
+    def token_eos(self):
+        return FakeLlama.END_OF_TEXT
+
+    def close(self):
+        self.closed = True
+
+
+@pytest.fixture
+def fake_llama_cpp(monkeypatch):
+    return install_fake_module(monkeypatch, "llama_cpp", FakeLlama, Llama=FakeLlama, LogitsProcessorList=list)
+
+
+@pytest.fixture
+def gguf(tmp_path):
+    path = tmp_path / "tiny-q4.gguf"
+    path.write_bytes(b"GGUF")
+    return str(path)
+
+
+def test_llamacpp_loads_the_model_once_and_samples_the_batch_with_fresh_seeds(fake_llama_cpp, gguf):
+    cfg = LlamaCppConfig(model_path=gguf, batch_size=3, temperature=0.8, top_p=0.95, max_tokens=300, n_ctx=2048, n_threads=2)
+    generator = make_generator(cfg, seed=0)
+    generations = generator.generate(make_prompt(STARTER), 3) + generator.generate(make_prompt(STARTER), 2)
+    generator.close()
+    [llm] = FakeLlama.instances
+    assert llm.kwargs == dict(model_path=gguf, n_ctx=2048, n_threads=2, n_threads_batch=2, n_gpu_layers=0, verbose=False)
+    assert all(call["messages"] == MESSAGES for call in llm.calls)
+    assert all(len(call.pop("logits_processor")) == 1 for call in llm.calls)
+    assert {(c["temperature"], c["top_p"], c["max_tokens"]) for c in llm.calls} == {(0.8, 0.95, 300)}
+    assert len({c["seed"] for c in llm.calls}) == 5
+    assert [g.text for g in generations] == [f"def policy(obs):\n    return {i}.0" for i in range(1, 6)]
+    assert {g.generator for g in generations} == {"llamacpp:tiny-q4.gguf"}
+    assert {(g.prompt_tokens, g.completion_tokens, g.prefix) for g in generations} == {(40, 7, "")}
+    assert all(g.seconds >= 0 for g in generations) and llm.closed
+
+
+def test_llamacpp_completion_form_continues_the_prompt_text(fake_llama_cpp, gguf):
+    generator = make_generator(LlamaCppConfig(model_path=gguf, prompt_format="completion"), seed=0)
+    [generation] = generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 1)
+    [call] = FakeLlama.instances[0].calls
+    assert call["prompt"] == PROMPT_TEXT and call["stop"] == list(COMPLETION_STOP)
+    assert (generation.text, generation.prefix, generation.prompt_tokens) == ("    return obs[0]\n", PROMPT_TEXT, 50)
+    extracted = extract_policy(generation.text, prefix=generation.prefix)
+    assert extracted == 'def policy(obs):\n    """Improved version of policy_v0."""\n    return obs[0]'
+
+
+def test_llamacpp_cancel_ends_the_answer_being_written_and_the_batch(fake_llama_cpp, gguf):
+    generator = make_generator(LlamaCppConfig(model_path=gguf), seed=0)
+    generator.generate(make_prompt(STARTER), 1)
+    [end_if_cancelled] = FakeLlama.instances[0].calls[0]["logits_processor"]
+    scores = np.arange(10, dtype=np.float32)
+    assert end_if_cancelled([], scores) is scores  # sampling as usual ...
+    generator.cancel()
+    ended = end_if_cancelled([], scores)  # ... then only the end-of-text token is left
+    assert ended[FakeLlama.END_OF_TEXT] == 0 and np.isneginf(np.delete(ended, FakeLlama.END_OF_TEXT)).all()
+    assert generator.generate(make_prompt(STARTER), 3) == []
+
+
+def test_llamacpp_a_prompt_longer_than_the_context_is_a_generator_error(fake_llama_cpp, gguf, monkeypatch):
+    def refuse(self, messages, **sampling):
+        raise ValueError("Requested tokens (5000) exceed context window of 4096")
+
+    monkeypatch.setattr(FakeLlama, "create_chat_completion", refuse)
+    generator = make_generator(LlamaCppConfig(model_path=gguf), seed=0)
+    with pytest.raises(GeneratorError, match=r"llama.cpp refused the prompt \(ValueError: Requested tokens .*\); raise llm.n_ctx"):
+        generator.generate(make_prompt(STARTER), 1)
+
+
+def test_llamacpp_downloads_from_the_hub_through_llama_cpp(fake_llama_cpp):
+    cfg = LlamaCppConfig(repo_id="Qwen/Qwen2.5-Coder-0.5B-Instruct-GGUF", filename="qwen2.5-coder-0.5b-instruct-q4_k_m.gguf")
+    generator = make_generator(cfg, seed=0)
+    [llm] = FakeLlama.instances
+    assert (llm.kwargs["repo_id"], llm.kwargs["filename"]) == (cfg.repo_id, cfg.filename)
+    assert generator.name == "llamacpp:Qwen/Qwen2.5-Coder-0.5B-Instruct-GGUF/qwen2.5-coder-0.5b-instruct-q4_k_m.gguf"
+
+
+@pytest.mark.parametrize("settings, message", [
+    ({}, "llm=llamacpp needs llm.model_path=<file.gguf>, or llm.repo_id and llm.filename"),
+    ({"model_path": "/nonexistent/model.gguf"}, "llm.model_path: no such file: /nonexistent/model.gguf"),
+    ({"repo_id": "org/repo"}, "llm.repo_id and llm.filename go together"),
+    ({"model_path": "GGUF", "repo_id": "org/repo", "filename": "m.gguf"}, "(not both)"),
+    ({"model_path": "GGUF", "prompt_format": "fim"}, "llm.prompt_format must be chat or completion"),
+    ({"model_path": "GGUF", "n_threads": 0}, "llm.n_threads must be >= 1"),
+])
+def test_llamacpp_config_errors(gguf, settings, message):
+    settings = {key: gguf if value == "GGUF" else value for key, value in settings.items()}
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        LlamaCppConfig(**settings)
+
+
+def test_llamacpp_missing_or_failing_is_a_generator_error(fake_llama_cpp, gguf, monkeypatch):
+    FakeLlama.fail_with = ValueError("Failed to load model from file\nmore")
+    with pytest.raises(GeneratorError, match=r"^llama.cpp could not load .*tiny-q4.gguf: ValueError: Failed to load model from file$"):
+        make_generator(LlamaCppConfig(model_path=gguf), seed=0)
+    monkeypatch.setitem(sys.modules, "llama_cpp", None)
+    with pytest.raises(GeneratorError, match=re.escape("llm=llamacpp needs llama-cpp-python: pip install 'colmo[llamacpp]'")):
+        make_generator(LlamaCppConfig(model_path=gguf), seed=0)
+
+
 # ------------------------------------------------------------------------------------ registry
 
 def test_registry_names_every_generator():
-    assert set(GENERATORS) == {"mutate", "openai", "vllm"}
+    assert set(GENERATORS) == {"mutate", "openai", "vllm", "llamacpp"}
     generator = make_generator(MutateConfig(batch_size=2), seed=0)
     assert isinstance(generator, MutateGenerator)
     assert all(isinstance(g, Generation) for g in generator.generate(make_prompt(STARTER), 2))
-    with pytest.raises(ConfigError, match="llm.name must be one of mutate, openai, vllm"):
+    with pytest.raises(ConfigError, match="llm.name must be one of llamacpp, mutate, openai, vllm"):
         make_generator(GeneratorConfig(name="gpt"), seed=0)

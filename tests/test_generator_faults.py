@@ -7,6 +7,7 @@ import re
 import socket
 
 from conftest import FakeOpenAIServer, compose
+
 from colmo.search import Search
 from colmo.store import ProgramStore
 
@@ -23,7 +24,7 @@ def test_failing_servers_are_retried_then_the_search_stops_cleanly(tmp_path, cap
             "search", "llm=openai", f"llm.base_url=[{server.url},{dead_url}]", "llm.model=test-model",
             "llm.batch_size=2", "llm.max_retries=2", "llm.backoff_s=0.01", "llm.max_backoff_s=0.05",
             "llm.timeout_s=1", "llm.max_consecutive_failures=8", "search.max_samples=50",
-            "gfo.budget=3", "task.episodes=1", "tracker=none", "executor.workers=1", "search.progress=false",
+            "gfo.budget=3", "task.episodes=1", "tracker=none", "executor.workers=1", "search.progress=false", "evaluation.render=false", "evaluation.simplify=false",
         )
         with caplog.at_level(logging.WARNING, logger="colmo.generate"):
             summary = Search(cfg, tmp_path).run()
@@ -32,14 +33,14 @@ def test_failing_servers_are_retried_then_the_search_stops_cleanly(tmp_path, cap
         refusing.close()
 
     # Requests run in parallel, so the count that trips the limit may pass it by one or two.
-    assert re.match(r"generator failed: no OpenAI-compatible server answered after (8|9|10) attempts", summary["stop_reason"])
+    assert re.match(r"generator failed: no OpenAI-compatible server answered after (8|9|10) attempts", summary.stop_reason)
     retries = [r.getMessage() for r in caplog.records if "retry" in r.getMessage()]
     assert len(retries) >= 4
-    reasons = " ".join(retries) + summary["stop_reason"]
+    reasons = " ".join(retries) + summary.stop_reason
     assert "InternalServerError" in reasons and "APIConnectionError" in reasons  # 500s and the refusing server
     assert "JSONDecodeError" in reasons or "APITimeoutError" in reasons  # garbage or a stall
     # What was generated before the failures was evaluated and kept.
-    assert summary["samples"] == 2
+    assert summary.samples == 2
     store = ProgramStore(tmp_path / "programs.db")
     assert len([r for r in store.records() if r.sample >= 0]) == 2
     store.close()

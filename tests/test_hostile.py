@@ -1,9 +1,14 @@
 """Hostile programs, run end to end through the real sandbox.
 
-For each: the program is marked failed with the right reason, the worker pool (or
-`colmo.optimize`, or a search) goes on and scores a well-behaved program exactly as before,
-nothing outside the sandbox's temporary directory changes, and no process is left behind.
-One pool with one worker, a 3 s timeout and 512 MB of address space serves the module.
+For each: the program is marked failed with the right reason, the executor goes on and scores
+well-behaved programs exactly as before, its score is never above doing nothing, nothing
+outside the sandbox changes, no secret leaks, and no process is left behind. One executor with
+one worker, a 3 s limit per evaluation and 512 MB serves the module; the tests through
+`colmo-optimize` and a search use the default limits (derived from the task).
+
+`ESCAPED` is the test-only hook for the OS layer: a spec that lets its policies import `os`,
+`sys`, `ctypes` and `socket`, which simulates a program that got past the Python level (as an
+object-array exploit would): its system calls must be stopped by the kernel layers.
 """
 
 from __future__ import annotations
@@ -19,17 +24,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hydra import compose, initialize_config_module
+from conftest import children_of, compose, last_json_line, same_outcome, wait_for
 
-import colmo.search
-from colmo.config import register_schemas, to_objects
-from colmo.generate import Generation, Generator, MutateGenerator
-from colmo.sandbox import EvalRequest, WorkerPool
+from colmo.evaluation import FAST, REFEREE, EvalRequest, Evaluation
+from colmo.executor import LocalExecutor
+from colmo.generate import Generation, Generator
+from colmo.generate.mutate import MutateGenerator
+from colmo.intake import MAX_ANSWER_CHARS, Unusable, read_program
+from colmo.search import Search
 from colmo.spec import load_spec
 from colmo.store import STORE_FILE, ProgramStore
-from colmo.task import Evaluation, episode_seeds
-
-from conftest import last_json_line
+from colmo.task import episode_seeds
 
 TIMEOUT_S = 3
 MEMORY_MB = 512
@@ -56,6 +61,23 @@ def policy(obs):
         return np.sign(obs[2]) + noise
     return 9.437 * np.sin(x1) - 2.746 * obs[2] + noise
 """
+NOTHING = "def policy(obs):\n    return 0.0\n"
+
+ESCAPED = '''"""Pendulum, with policies that may import os, sys, ctypes and socket (a test-only hook:
+what a program that escaped the Python-level checks could do)."""
+
+from colmo.environments.pendulum import PendulumSwingup
+
+ALLOWED_IMPORTS = ("os", "sys", "ctypes", "socket")
+
+
+def make_environment(**options):
+    return PendulumSwingup(**options)
+
+
+def policy(obs):
+    return 0.0
+'''
 
 
 def live_processes(session: int) -> list[int]:
@@ -73,7 +95,7 @@ def live_processes(session: int) -> list[int]:
 
 def processes_inside(directory: Path) -> list[int]:
     """Processes whose working directory lies under `directory` (sandbox workers have their
-    pool's temporary directory as cwd)."""
+    executor's temporary directory as cwd)."""
     found = []
     for cwd in Path("/proc").glob("[0-9]*/cwd"):
         try:
@@ -85,27 +107,21 @@ def processes_inside(directory: Path) -> list[int]:
 
 
 class Sandbox:
-    """The module's pool, recording every worker it starts."""
+    """The module's executor, recording every worker (session) it has run."""
 
-    def __init__(self, pool: WorkerPool):
-        self.pool = pool
+    def __init__(self, executor: LocalExecutor):
+        self.executor = executor
         self.sessions: set[int] = set()
-        start = pool._start_worker
 
-        def start_and_record():
-            worker = start()
-            self.sessions.add(worker.process.pid)
-            return worker
-
-        pool._start_worker = start_and_record
-
-    def evaluate(self, code: str, spec: Path = PENDULUM, episodes: int = 1) -> Evaluation:
-        request = EvalRequest(str(spec), (), tuple(episode_seeds(0, episodes)), code, (), ("numpy", "math"))
-        return self.pool.evaluate([request])[0]
+    def evaluate(self, code: str, spec: Path = PENDULUM, episodes: int = 1, mode: str = FAST, imports=("numpy", "math")) -> Evaluation:
+        request = EvalRequest(str(spec), (), tuple(episode_seeds(0, episodes)), code, (), imports, mode=mode, timeout_s=TIMEOUT_S, memory_mb=MEMORY_MB)
+        [evaluation] = self.executor.evaluate([request])
+        self.sessions.update(self.executor.worker_pids())
+        return evaluation
 
     @property
     def worker_pid(self) -> int:
-        return self.pool.workers[0].process.pid
+        return self.executor.worker_pids()[0]
 
 
 @pytest.fixture(scope="module")
@@ -116,14 +132,22 @@ def canary(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="module")
+def escaped_spec(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("spec") / "escaped.py"
+    path.write_text(ESCAPED)
+    return path
+
+
+@pytest.fixture(scope="module")
 def sandbox(canary):
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("OPENAI_API_KEY", SECRET)  # in the coordinator's environment while workers start
-        sandbox = Sandbox(WorkerPool(1, timeout_s=TIMEOUT_S, memory_mb=MEMORY_MB))
+        executor = LocalExecutor(1, memory_mb=MEMORY_MB, max_retries=0)
+        sandbox = Sandbox(executor)
         yield sandbox
-        tmpdir = Path(sandbox.pool.tmpdir)
+        tmpdir = Path(executor.tmpdir)
         assert not any(tmpdir.iterdir()), "a program wrote into the sandbox directory"
-        sandbox.pool.close()
+        executor.close()
     assert not tmpdir.exists()
     assert all(not live_processes(session) for session in sandbox.sessions), "a process was left behind"
     assert canary.read_text() == CANARY_TEXT
@@ -131,15 +155,15 @@ def sandbox(canary):
 
 @pytest.fixture(scope="module")
 def baseline(sandbox) -> dict[str, Evaluation]:
-    scores = {name: sandbox.evaluate(code) for name, code in (("good", GOOD), ("noisy", NOISY))}
-    assert all(e.failure is None and e.score > 0 for e in scores.values()), scores
+    scores = {name: sandbox.evaluate(code) for name, code in (("good", GOOD), ("noisy", NOISY), ("nothing", NOTHING))}
+    assert all(e.failure is None for e in scores.values()) and scores["good"].score > scores["nothing"].score, scores
     return scores
 
 
 def assert_unharmed(sandbox: Sandbox, baseline: dict[str, Evaluation]) -> None:
     """Well-behaved programs evaluated after a hostile one score exactly as before."""
-    assert sandbox.evaluate(GOOD) == baseline["good"]
-    assert sandbox.evaluate(NOISY) == baseline["noisy"]
+    assert same_outcome(sandbox.evaluate(GOOD), baseline["good"])
+    assert same_outcome(sandbox.evaluate(NOISY), baseline["noisy"])
 
 
 def policy_doing(statement: str, imports: str = "import numpy as np") -> str:
@@ -150,6 +174,7 @@ HOSTILE = {
     # name: (program, reason prefix); "{canary}" is the path of a file outside the sandbox.
     "infinite loop": (policy_doing("while True:\n        pass"), "timeout: "),
     "C-level loop at import": ("x = sum(range(10 ** 12))\n" + policy_doing("pass"), "timeout: "),
+    "C-level factorial": (policy_doing("math.factorial(int(1e8))", "import math"), "timeout: "),
     "huge array": (policy_doing("np.ones(10 ** 11)"), "memory: Unable to allocate"),
     "growing list": ("import numpy as np\nchunks = []\n" + policy_doing("while True:\n        chunks.append(np.ones(10 ** 6))"), "memory: "),
     "huge string": (policy_doing("'x' * 10 ** 10"), "memory: "),
@@ -195,28 +220,79 @@ HOSTILE = {
     "traceback frame": (policy_doing("try:\n        1 / 0\n    except Exception as e:\n        e.__traceback__.tb_frame"), "forbidden: .tb_frame"),
     "bound method owner": (policy_doing("print.__self__"), "forbidden: .__self__"),
     "array ctypes": (policy_doing("obs.ctypes.data"), "forbidden: .ctypes"),
+    # Raw memory: object arrays over buffers, in every form, and freeing a buffer under a view.
+    "object array over a buffer": (policy_doing("a = np.ndarray(shape=(4,), dtype='O', buffer=bytearray(32))"), "forbidden: .ndarray"),
+    "structured object dtype": (policy_doing("a = np.frombuffer(bytes(8), dtype=[('a', 'O')])"), "forbidden: object dtype 'O'"),
+    "subarray object dtype": (policy_doing("a = np.zeros(1, dtype=('O', (1,)))"), "forbidden: object dtype 'O'"),
+    "buffer keyword": (policy_doing("a = np.zeros(1).view()\n    b = np.asarray(a, like=a)\n    c = np.recarray((1,), buf=a, formats='f8')"), "forbidden: .recarray"),
+    "resize under a view": (policy_doing("a = np.zeros(10 ** 6)\n    v = a[:]\n    a.resize(1, refcheck=False)\n    v[:] = 1"), "forbidden: .resize"),
+    "decorator rebinding": ("import numpy as np\n@(lambda f: np.poly1d)\ndef policy(obs):\n    pass\npolicy.x = 1\n", "forbidden: decorator on policy"),
 }
 
 
 @pytest.mark.parametrize("name", HOSTILE)
-def test_hostile_program_fails_with_its_reason_and_the_pool_goes_on(sandbox, baseline, canary, name):
+def test_hostile_program_fails_with_its_reason_and_the_sandbox_goes_on(sandbox, baseline, canary, name):
     code, expected = HOSTILE[name]
     evaluation = sandbox.evaluate(code.replace("{canary}", str(canary)))
     assert evaluation.failure is not None and evaluation.failure.startswith(expected), evaluation.failure
     assert evaluation.failure.isprintable() and len(evaluation.failure) <= 500
+    assert SECRET not in evaluation.failure
     assert evaluation.score == -np.inf
     assert_unharmed(sandbox, baseline)
 
 
-def test_a_timeout_kills_the_worker_and_a_fresh_one_replaces_it(sandbox, baseline):
-    sandbox.evaluate(GOOD)
-    before = sandbox.worker_pid
-    start = time.perf_counter()
-    assert sandbox.evaluate(HOSTILE["infinite loop"][0]).failure.startswith("timeout: ")
-    assert time.perf_counter() - start < TIMEOUT_S + 2
-    assert not live_processes(before)
+# What a program that escaped the Python level would try, run through the test-only hook spec:
+# each attempt must be refused by the kernel, never reach its target, and leave a reason.
+ESCAPES = {
+    "write a file": "fd = os.open('{canary}', os.O_WRONLY | os.O_TRUNC)",
+    "create a file": "fd = os.open('{outside}/new.txt', os.O_WRONLY | os.O_CREAT)",
+    "rename a file": "os.rename('{canary}', '{canary}.moved')",
+    "delete a file": "os.unlink('{canary}')",
+    "read the coordinator's secrets": "data = os.read(os.open('/proc/{coordinator}/environ', os.O_RDONLY), 10 ** 6)",
+    "read its worker's memory": "data = os.read(os.open('/proc/' + str(os.getppid()) + '/mem', os.O_RDONLY), 1)",
+    "signal the worker": "os.kill(os.getppid(), 9)",
+    "signal the coordinator": "os.kill({coordinator}, 15)",
+    "new process": "libc = ctypes.CDLL(None, use_errno=True)\n    libc.fork() == -1 and sys.exit(ctypes.get_errno())",
+    "execute a program": "os.execv('/bin/sh', ['sh', '-c', 'touch {canary}'])",
+    "open a socket": "socket.socket(socket.AF_INET, socket.SOCK_STREAM)",
+    "leave its session": "os.setsid()",
+    "become root again": "os.setuid(0)",
+}
+
+
+@pytest.mark.parametrize("name", ESCAPES)
+def test_the_os_layer_stops_an_escaped_program(sandbox, baseline, canary, escaped_spec, name):
+    statement = ESCAPES[name].format(canary=canary, outside=canary.parent, coordinator=os.getpid())
+    code = policy_doing(statement, "import os, sys, ctypes, socket")
+    evaluation = sandbox.evaluate(code, spec=escaped_spec, imports=("numpy", "math", "os", "sys", "ctypes", "socket"))
+    assert evaluation.failure is not None, f"{name} was not stopped"
+    assert evaluation.failure.startswith(("exception: PermissionError", "exception: SystemExit: 1", "exception: OSError")), evaluation.failure
+    assert SECRET not in evaluation.failure
+    assert canary.read_text() == CANARY_TEXT and sorted(p.name for p in canary.parent.iterdir()) == ["canary.txt"]
     assert_unharmed(sandbox, baseline)
-    assert sandbox.worker_pid != before
+
+
+def test_a_forged_score_is_caught_by_the_referee(sandbox, baseline, escaped_spec):
+    """An escaped program replaces the evaluator in its own process: the fast path reports what
+    it likes, the referee measures what its actions earn."""
+    forge = (  # with the real builtins' setattr, as an object-array escape would find them
+        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.task'], 'rollout', lambda env, policy, seed, steps=None: (1000.0, 1000))\n"
+        + NOTHING
+    )
+    imports = ("numpy", "math", "os", "sys", "ctypes", "socket")
+    fast = sandbox.evaluate(forge, spec=escaped_spec, imports=imports)
+    refereed = sandbox.evaluate(forge, spec=escaped_spec, imports=imports, mode=REFEREE)
+    assert fast.failure is None and fast.score == 1000.0  # the forgery, in its own process ...
+    assert refereed.failure is None and refereed.score <= baseline["nothing"].score + 1e-9  # ... not with the referee
+    assert_unharmed(sandbox, baseline)  # nor in the next process
+
+
+def test_a_timeout_kills_the_evaluation_and_the_worker_goes_on(sandbox, baseline):
+    sandbox.evaluate(GOOD)
+    worker = sandbox.worker_pid
+    assert sandbox.evaluate(HOSTILE["infinite loop"][0]).failure.startswith("timeout: ")
+    assert sandbox.worker_pid == worker and not children_of(worker)  # the evaluation's process is gone
+    assert_unharmed(sandbox, baseline)
 
 
 @pytest.mark.parametrize("program", [
@@ -232,22 +308,15 @@ def test_a_program_cannot_change_how_the_next_one_is_scored(sandbox, baseline, p
     assert_unharmed(sandbox, baseline)
 
 
-def test_clean_up_code_runs_within_the_programs_own_time_limit(sandbox, baseline):
-    """A generator whose `finally` never ends times out its own evaluation, not the next one."""
-    program = "def stall():\n    try:\n        yield\n    finally:\n        while True:\n            pass\ng = stall()\nnext(g)\n" + policy_doing("pass")
-    assert sandbox.evaluate(program).failure.startswith("timeout: ")
-    assert_unharmed(sandbox, baseline)
-
-
 def test_a_program_cannot_carry_state_between_evaluations(sandbox):
     program = "import numpy as np\ncalls = [0]\ndef policy(obs):\n    calls[0] += 1\n    return np.sign(obs[2]) if calls[0] > 1500 else 0.0\n"
     first = sandbox.evaluate(program, episodes=2)
-    assert first.failure is None and sandbox.evaluate(program, episodes=2) == first
+    assert first.failure is None and same_outcome(sandbox.evaluate(program, episodes=2), first)
 
 
 def test_printing_megabytes_neither_breaks_nor_blocks_the_protocol(sandbox, baseline):
     program = GOOD.replace("def policy(obs):\n", "print('x' * 10 ** 8)\n\ndef policy(obs):\n    print(obs, 'y' * 10 ** 5)\n")
-    assert sandbox.evaluate(program) == baseline["good"]
+    assert same_outcome(sandbox.evaluate(program), baseline["good"])
 
 
 def test_the_worker_has_no_secrets_no_inherited_files_and_no_network(sandbox, baseline):
@@ -263,64 +332,13 @@ def test_the_worker_has_no_secrets_no_inherited_files_and_no_network(sandbox, ba
     assert Path(f"/proc/{pid}/net/dev").read_text().count(":") == 1  # the loopback interface only
 
 
-ESCAPE_SPEC = '''"""Pendulum, but building its environment leaves a process behind, as a program that had
-escaped the sandbox could."""
-
-import ctypes
-import os
-import subprocess
-import time
-import _posixsubprocess
-
-from colmo.environments.pendulum import PendulumSwingup
-
-
-def make_environment(**options):
-    for function in (os.fork, os.system, os.posix_spawn, os.kill, os.setsid, _posixsubprocess.fork_exec):
-        if function.__name__ != "_refuse":
-            raise RuntimeError(f"os.{function.__name__} is not disarmed")
-    try:
-        subprocess.Popen(["true"])
-    except PermissionError:
-        pass
-    else:
-        raise RuntimeError("subprocess.Popen is not disarmed")
-    pid = ctypes.CDLL(None).fork()  # libc's fork, past the disarmed functions
-    if pid < 0:
-        raise RuntimeError("fork refused")
-    if pid == 0:
-        while True:
-            time.sleep(1)
-    return PendulumSwingup(**options)
-
-
-def policy(obs):
-    return 0.0
-'''
-
-
-def test_an_escaped_process_dies_with_its_worker(sandbox, baseline, tmp_path):
-    spec = tmp_path / "escape.py"
-    spec.write_text(ESCAPE_SPEC)
-    evaluation = sandbox.evaluate(policy_doing("pass"), spec=spec)
-    if evaluation.failure and "fork refused" in evaluation.failure:
-        assert os.geteuid() != 0  # RLIMIT_NPROC stopped it, which the kernel does not apply to root
-        return
-    assert evaluation.failure is None, evaluation.failure
-    session = sandbox.worker_pid
-    assert len(live_processes(session)) == 2  # the worker and what it left behind
-    assert sandbox.evaluate(HOSTILE["infinite loop"][0], spec=spec).failure.startswith("timeout: ")
-    assert not live_processes(session)
-    assert_unharmed(sandbox, baseline)
-
-
-def test_workers_die_with_their_coordinator(tmp_path):
+def test_workers_die_with_their_coordinator():
     coordinator = subprocess.Popen(
         [sys.executable, "-c", (
-            "from colmo.sandbox import EvalRequest, WorkerPool\n"
-            "pool = WorkerPool(1)\n"
-            f"pool.evaluate([EvalRequest({str(PENDULUM)!r}, (), (0,), 'def policy(obs):\\n    return 0.0\\n', (), ('numpy',))])\n"
-            "print(pool.workers[0].process.pid, flush=True)\n"
+            "from colmo.evaluation import EvalRequest\nfrom colmo.executor import LocalExecutor\n"
+            "executor = LocalExecutor(1)\n"
+            f"executor.evaluate([EvalRequest({str(PENDULUM)!r}, (), (0,), 'def policy(obs):\\n    return 0.0\\n', (), ('numpy',))])\n"
+            "print(executor.worker_pids()[0], flush=True)\n"
             "input()\n"
         )],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
@@ -329,43 +347,48 @@ def test_workers_die_with_their_coordinator(tmp_path):
     assert live_processes(worker)
     coordinator.send_signal(signal.SIGKILL)
     coordinator.wait()
-    deadline = time.monotonic() + 10
-    while live_processes(worker) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    assert not live_processes(worker)
+    wait_for(lambda: not live_processes(worker), what="the worker to die with its coordinator")
 
 
-# -- through `colmo.optimize` and a search ------------------------------------------------------
+def test_a_huge_answer_is_refused_before_it_is_parsed():
+    with pytest.raises(Unusable, match=f"more than the {MAX_ANSWER_CHARS} allowed"):
+        read_program("def policy(obs):\n    return 0.0\n" + "#" * 10_000_000, ("numpy",))
+    with pytest.raises(Unusable, match="nests brackets more than"):
+        read_program("def policy(obs):\n    return " + "(" * 150 + "0" + ")" * 150 + "\n", ("numpy",))
 
-SANDBOX_OPTIONS = ("executor.workers=1", f"executor.timeout_s={TIMEOUT_S}", f"executor.memory_mb={MEMORY_MB}")
+
+# -- through `colmo-optimize` and a search, with default limits -----------------------------------
 
 
 @pytest.mark.parametrize("name, exit_code, message", [
     ("infinite loop", 1, "colmo: the policy failed: timeout: "),
+    ("C-level factorial", 1, "colmo: the policy failed: timeout: "),
     ("huge array", 1, "colmo: the policy failed: memory: "),
     ("patch np.isfinite", 2, "colmo: error: no usable policy in "),
 ])
-def test_optimize_reports_the_failure(tmp_path, canary, name, exit_code, message):
+def test_optimize_reports_the_failure_within_its_derived_time_limit(tmp_path, canary, name, exit_code, message):
     code, reason = HOSTILE[name]
     policy_file = tmp_path / "policy.py"
     policy_file.write_text(code)
     tmp = tmp_path / "tmp"  # the sandbox's temporary directory is made in here
     tmp.mkdir()
+    start = time.monotonic()
     result = subprocess.run(
-        [sys.executable, "-m", "colmo.optimize", f"policy_file={policy_file}", "task.episodes=1", "gfo.budget=3", *SANDBOX_OPTIONS],
-        cwd=tmp_path, capture_output=True, text=True, timeout=120, env={**os.environ, "TMPDIR": str(tmp)},
+        [sys.executable, "-m", "colmo.optimize", f"policy_file={policy_file}", "task.episodes=1", "gfo.budget=3", "executor.workers=1"],
+        cwd=tmp_path, capture_output=True, text=True, timeout=300, env={**os.environ, "TMPDIR": str(tmp), "OPENAI_API_KEY": SECRET},
     )
     assert result.returncode == exit_code, result.stderr
-    assert message in result.stderr and reason in result.stderr
+    assert message in result.stderr and reason in result.stderr and SECRET not in result.stdout + result.stderr
     if exit_code == 1:
         assert last_json_line(result.stdout)["failure"].startswith(reason)
+        assert time.monotonic() - start < 120  # seconds, not the ten minutes a fixed limit once cost
     assert not any(tmp.iterdir()) and not processes_inside(tmp)
     assert canary.read_text() == CANARY_TEXT
 
 
 SEARCH_HOSTILE = (
     "infinite loop", "huge array", "fork bomb", "write a file", "socket", "raise SystemExit", "deep recursion",
-    "os.environ", "patch np.clip", "subclasses", "str.format fields", "generator frame",
+    "os.environ", "patch np.clip", "subclasses", "str.format fields", "generator frame", "object array over a buffer",
 )
 
 
@@ -373,6 +396,7 @@ class HostileGenerator(Generator):
     """Half of what it emits is a hostile program; the rest comes from the mutate generator."""
 
     def __init__(self, inner: Generator, seed: int, canary: Path):
+        super().__init__(inner.cfg, seed)
         self.inner = inner
         self.rng = np.random.default_rng(seed)
         self.hostile = itertools.cycle(HOSTILE[name][0].replace("{canary}", str(canary)) for name in SEARCH_HOSTILE)
@@ -385,20 +409,17 @@ class HostileGenerator(Generator):
 
 
 def test_a_search_flooded_with_hostile_programs_keeps_running_and_improving(tmp_path, canary, monkeypatch):
-    monkeypatch.setattr(colmo.search, "make_generator", lambda cfg, seed, probe: HostileGenerator(MutateGenerator(cfg, seed, probe), seed, canary))
     tmp = tmp_path / "tmp"
     tmp.mkdir()
     monkeypatch.setattr(tempfile, "tempdir", str(tmp))
-    register_schemas()
-    overrides = ["task.episodes=1", "search.max_samples=24", "llm.batch_size=4", "gfo.budget=8", "tracker=none", *SANDBOX_OPTIONS]
-    with initialize_config_module(config_module="colmo.conf", version_base="1.3"):
-        cfg = to_objects(compose(config_name="search", overrides=overrides))
-    summary = colmo.search.Search(cfg, tmp_path / "run").run()
+    cfg = compose("search", "task.episodes=1", "search.max_samples=24", "llm.batch_size=4", "gfo.budget=8", "tracker=none", "executor.workers=1", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false")
+    generator = HostileGenerator(MutateGenerator(cfg.llm, cfg.seed), cfg.seed, canary)
+    summary = Search(cfg, tmp_path / "run", generator=generator).run()
 
-    assert summary["stop_reason"] == "max_samples" and summary["samples"] == 24
+    assert summary.stop_reason == "max_samples" and summary.samples == 24
     records = list(ProgramStore(tmp_path / "run" / STORE_FILE).records())
     starter = next(r for r in records if r.sample == -1)
-    assert summary["best_score"] > starter.score
+    assert summary.best_score > starter.score
     reasons = {HOSTILE[name][0].replace("{canary}", str(canary)): HOSTILE[name][1] for name in SEARCH_HOSTILE}
     hostile = [r for r in records if r.generator == "hostile" and r.status != "duplicate"]
     assert len(hostile) >= 6

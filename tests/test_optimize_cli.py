@@ -1,7 +1,6 @@
 """`python -m colmo.optimize`: tuning one policy file end to end, and its user errors."""
 
 import pytest
-
 from conftest import last_json_line, run_colmo
 
 RAW_ANSWER = '''Sure! Here is an improved controller. It switches between energy pumping and a PD law:
@@ -22,20 +21,20 @@ This should swing the pendulum up faster.
 
 
 def optimize(tmp_path, *overrides):
-    return run_colmo("colmo.optimize", *overrides, "executor.workers=2", cwd=tmp_path)
+    return run_colmo("colmo.optimize", *overrides, "executor.workers=2", "evaluation.episodes=10", cwd=tmp_path)
 
 
 def test_mistuned_policy_gains_100_points_with_oneplusone(tmp_path, examples):
     result = optimize(tmp_path, f"policy_file={examples / 'pendulum_mistuned.py'}", "gfo=oneplusone")
     assert result.returncode == 0, result.stderr
     summary = last_json_line(result.stdout)
-    assert summary["evaluations"] == 101  # budget 100, plus the readable 4-digit code
-    assert summary["n_params"] == 3
+    assert summary["evaluations"] == 102  # budget 100, the readable 4-digit code, the referee's final score
+    assert summary["n_params"] == 3 and summary["steps"] > 0 and summary["heldout_score"] is not None
     assert summary["score"] >= summary["score_initial"] + 100, summary
     assert "score with its own constants" in result.stdout
     assert (next(tmp_path.glob("outputs/optimize/*/*/result.json"))).is_file()
     tuned = next(tmp_path.glob("outputs/optimize/*/*/tuned_policy.py")).read_text()
-    assert tuned == summary["code"] and "def policy(obs)" in tuned
+    assert tuned.startswith("# tuned by colmo-optimize") and tuned.endswith(summary["code"] + "\n")
 
 
 @pytest.mark.parametrize("method", ["bo", "cma"])

@@ -7,8 +7,10 @@ import pytest
 from dm_control import suite
 
 from colmo.environments.pendulum import PendulumSwingup
+from colmo.evaluation import REFEREE, EvalRequest
+from colmo.executor import LocalExecutor
 from colmo.program import parametrize
-from colmo.sandbox import compile_policy
+from colmo.sandbox.namespace import load_policy
 from colmo.spec import load_spec
 from colmo.task import episode_seeds, evaluate_policy
 
@@ -50,11 +52,12 @@ def test_initial_angles_follow_the_seed():
 
 
 def test_paper_policy_scores_above_540_on_100_episodes(examples):
+    """Measured by the referee in a sandbox worker, as a search measures final scores."""
     spec = load_spec("pendulum.py")
     program = parametrize((examples / "paper_pendulum.py").read_text())
-    namespace = compile_policy(program.skeleton, spec.allowed_imports)
-    namespace["params"] = program.values
-    evaluation = evaluate_policy(spec.make_environment(), namespace["policy"], episode_seeds(0, 100))
+    request = EvalRequest(str(spec.path), (), tuple(episode_seeds(0, 100)), program.skeleton, program.values, spec.allowed_imports, mode=REFEREE)
+    with LocalExecutor(1) as executor:
+        [evaluation] = executor.evaluate([request])
     assert evaluation.failure is None
     assert len(evaluation.returns) == 100
     assert evaluation.score > 540, evaluation.score  # the paper reports 591; measured 601.7
@@ -66,11 +69,22 @@ def test_paper_policy_scores_above_540_on_100_episodes(examples):
         ("return float('nan')", "non-finite action (step 0)"),
         ("return np.zeros(3)", "bad action shape: (3,), expected (1,) (step 0)"),
         ("return 1 / 0", "exception: ZeroDivisionError: division by zero (step 0)"),
-        ("return 'left'", "bad action: str is not numeric"),
+        ("return 'left'", "bad action: <U4 values are not real numbers"),
+        # Only real numbers are actions, even where numpy would convert the value.
+        ("return '0.5'", "bad action: <U3 values are not real numbers"),
+        ("return b'1'", "bad action: |S1 values are not real numbers"),
+        ("return np.datetime64('2020-01-01')", "bad action: datetime64[D] values are not real numbers"),
+        ("return 1j", "bad action: complex128 values are not real numbers"),
+        ("return [0.5, 'x']", "bad action: <U32 values are not real numbers"),
+        ("return [np.float64(0.5)][0:1] + [None][:0]", None),
     ],
 )
 def test_bad_policies_fail_with_a_reason(body, reason):
-    namespace = compile_policy(f"import numpy as np\ndef policy(obs):\n    {body}\n", ("numpy",))
-    evaluation = evaluate_policy(PendulumSwingup(), namespace["policy"], [0, 1])
+    """The tests' own programs, run in this process."""
+    policy = load_policy(f"import numpy as np\ndef policy(obs):\n    {body}\n", ("numpy",), ())
+    evaluation = evaluate_policy(PendulumSwingup(), policy, [0, 1])
+    if reason is None:
+        assert evaluation.failure is None
+        return
     assert evaluation.failure is not None and evaluation.failure.startswith(reason)
     assert evaluation.score == -math.inf

@@ -2,9 +2,9 @@ import re
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 
 from colmo.program import ParametricProgram, ProgramError, count_lines, instantiate, parametrize
-from conftest import EXAMPLES
 
 # The five policies of the paper's Fig. 5 (examples/paper_*.py: missing colon of ball-in-cup fixed).
 PENDULUM, CHEETAH, QUADRUPED, BALL_IN_CUP, UNITREE_A1 = (

@@ -206,3 +206,22 @@ def test_programs_must_come_in_ascending_score():
 def test_a_program_without_the_function_is_rejected():
     with pytest.raises(ValueError, match=r"defines no policy\(\)"):
         build_prompt("Task.", Selection(0, [stored("def act(obs):\n    return 0.0", 0.0)]))
+
+
+@pytest.mark.parametrize("spec_name", ["pendulum.py", "cheetah.py", "ball_in_cup.py", "a1.py", "quadruped.py"])
+def test_the_task_description_with_observation_layout_and_action_bounds_reaches_both_forms(spec_name):
+    spec = load_spec(spec_name)
+    program = parametrize(spec.starter_code)
+    starter = StoredProgram(program.key, instantiate(program.skeleton, program.values), 0.0, 0, -1)
+    prompt = build_prompt(spec.description, Selection(0, [starter]))
+    assert "Observation (size" in spec.description and "Action" in spec.description
+    assert spec.description in prompt.text and spec.description in prompt.messages[1]["content"]
+
+
+def test_completion_stop_sequences_end_the_function_at_the_next_top_level_statement():
+    from colmo.prompt import COMPLETION_STOP
+
+    body = "    return -obs[0]\n\n\ndef policy_v2(obs):\n    return 0.0\n"
+    cut = min(body.index(stop) for stop in COMPLETION_STOP if stop in body)
+    assert body[:cut] == "    return -obs[0]\n\n"
+    assert len(COMPLETION_STOP) <= 4  # OpenAI's completions endpoint takes at most four

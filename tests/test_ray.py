@@ -9,23 +9,23 @@ import signal
 import sqlite3
 import sys
 import threading
-import time
 from pathlib import Path
 
 import pytest
+from conftest import EXAMPLES, children_of, compose, last_json_line, run_colmo, same_outcome, wait_for
 
-from colmo.config import ConfigError, ExecutorConfig
-from colmo.executor import make_executor
+from colmo.config import RayExecutorConfig
+from colmo.errors import ConfigError
+from colmo.evaluation import EvalRequest
+from colmo.executor import LocalExecutor, make_executor
 from colmo.program import parametrize
-from colmo.sandbox import EvalRequest, WorkerPool
 from colmo.search import Search
 from colmo.spec import load_spec
 from colmo.task import episode_seeds
-from conftest import EXAMPLES, compose, last_json_line, run_colmo
 
 requires_ray = pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="Ray is not installed: pip install 'colmo[ray]'")
 
-TINY = ("search.max_samples=8", "gfo.budget=4", "task.episodes=2", "tracker=none", "seed=3", "executor.workers=2", "search.progress=false")
+TINY = ("search.max_samples=8", "gfo.budget=4", "task.episodes=2", "tracker=none", "seed=3", "executor.workers=2", "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false")
 
 
 @pytest.fixture(scope="module")
@@ -54,13 +54,17 @@ def pendulum_requests(count: int, episodes: int) -> list[EvalRequest]:
     ]
 
 
-def evaluate_while_killing(executor, requests: list[EvalRequest], after_s: float) -> tuple[list, int]:
-    """Evaluate `requests` and SIGKILL one actor's process `after_s` seconds in."""
+def evaluating(actor: int) -> bool:
+    """Whether an actor's sandbox worker is running an evaluation (has an evaluation process)."""
+    return any(children_of(worker) for worker in children_of(actor))
+
+
+def evaluate_while_killing(executor, requests: list[EvalRequest]) -> tuple[list, int]:
+    """Evaluate `requests` and SIGKILL an actor's process while it evaluates one of them."""
     results: list = []
     batch = threading.Thread(target=lambda: results.extend(executor.evaluate(requests)))
     batch.start()
-    time.sleep(after_s)
-    victim = executor.worker_pids()[0]
+    victim = wait_for(lambda: next((pid for pid in executor.worker_pids() if evaluating(pid)), None), what="an actor at work")
     os.kill(victim, signal.SIGKILL)
     batch.join(timeout=300)
     assert not batch.is_alive(), "the batch never completed"
@@ -70,7 +74,7 @@ def evaluate_while_killing(executor, requests: list[EvalRequest], after_s: float
 def test_missing_ray_is_a_one_line_config_error(monkeypatch):
     monkeypatch.setitem(sys.modules, "ray", None)  # makes `import ray` fail
     with pytest.raises(ConfigError, match=r"^executor=ray needs Ray: pip install 'colmo\[ray\]'$"):
-        make_executor(ExecutorConfig(name="ray"))
+        make_executor(RayExecutorConfig())
 
 
 @requires_ray
@@ -86,9 +90,9 @@ def test_ray_search_equals_local_search(tmp_path, ray_instance):
     summaries = {}
     for name in ("local", "ray"):
         summaries[name] = Search(compose("search", *TINY, f"executor={name}"), tmp_path / name).run()
-    assert summaries["ray"]["samples"] == summaries["local"]["samples"] == 8
-    assert summaries["ray"]["best_score"] == summaries["local"]["best_score"]
-    assert summaries["ray"]["best_code"] == summaries["local"]["best_code"]
+    assert summaries["ray"].samples == summaries["local"].samples == 8
+    assert summaries["ray"].best_score == summaries["local"].best_score
+    assert summaries["ray"].best_code == summaries["local"].best_code
     local_rows, ray_rows = store_rows(tmp_path / "local"), store_rows(tmp_path / "ray")
     assert [row[0] for row in ray_rows] == list(range(-1, 8))
     assert ray_rows == local_rows
@@ -98,20 +102,18 @@ def test_ray_search_equals_local_search(tmp_path, ray_instance):
 @requires_ray
 def test_killed_actor_requests_are_retried_on_a_replacement(ray_instance, caplog):
     requests = pendulum_requests(8, episodes=20)
-    with WorkerPool(2) as pool:
-        expected = pool.evaluate(requests)
-    executor = make_executor(ExecutorConfig(name="ray", workers=2, max_retries=2))
+    with LocalExecutor(2) as local:
+        expected = local.evaluate(requests)
+    executor = make_executor(RayExecutorConfig(workers=2, max_retries=2))
     try:
         with caplog.at_level(logging.WARNING, logger="colmo.executor"):
-            results, victim = evaluate_while_killing(executor, requests, after_s=0.5)
-        assert results == expected  # every request answered once, in order, as if nothing happened
+            results, victim = evaluate_while_killing(executor, requests)
+        assert all(map(same_outcome, results, expected))  # every request answered once, in order, as if nothing happened
         assert all(result.failure is None for result in results)
         assert any("retrying its request (retry 1 of 2)" in message for message in caplog.messages)
-        assert executor.evaluate(requests[:2]) == expected[:2]  # the replacement works
-        deadline = time.time() + 60  # a replacement actor starts in the background
-        while len(executor.worker_pids()) < 2 and time.time() < deadline:
-            time.sleep(0.2)
-        assert victim not in executor.worker_pids() and len(executor.worker_pids()) == 2
+        assert all(map(same_outcome, executor.evaluate(requests[:2]), expected[:2]))  # the replacement works
+        wait_for(lambda: len(executor.worker_pids()) == 2, what="a replacement actor")  # it starts in the background
+        assert victim not in executor.worker_pids()
     finally:
         executor.close()
 
@@ -119,9 +121,9 @@ def test_killed_actor_requests_are_retried_on_a_replacement(ray_instance, caplog
 @requires_ray
 def test_without_retries_the_lost_request_is_recorded_as_failed(ray_instance):
     requests = pendulum_requests(8, episodes=20)
-    executor = make_executor(ExecutorConfig(name="ray", workers=2, max_retries=0))
+    executor = make_executor(RayExecutorConfig(workers=2, max_retries=0))
     try:
-        results, _ = evaluate_while_killing(executor, requests, after_s=0.5)
+        results, _ = evaluate_while_killing(executor, requests)
     finally:
         executor.close()
     assert len(results) == len(requests)
@@ -135,13 +137,10 @@ def test_search_completes_when_an_actor_is_killed(tmp_path, ray_instance, caplog
     overrides = (*TINY, "task.episodes=10")
     Search(compose("search", *overrides, "executor=local"), tmp_path / "local").run()
     search = Search(compose("search", *overrides, "executor=ray"), tmp_path / "ray")
-    victim = search.pool.worker_pids()[1]
+    victim = search.executor.worker_pids()[1]
     running = threading.Thread(target=search.run)
     running.start()
-    deadline = time.time() + 120
-    while not (tmp_path / "ray" / "programs.db").is_file() or not store_rows(tmp_path / "ray"):
-        assert time.time() < deadline, "the starter was never evaluated"
-        time.sleep(0.1)
+    wait_for(lambda: (tmp_path / "ray" / "programs.db").is_file() and store_rows(tmp_path / "ray"), what="the starter's evaluation")
     with caplog.at_level(logging.WARNING, logger="colmo.executor"):
         os.kill(victim, signal.SIGKILL)  # the starter is in: the search is now evaluating generated programs
         running.join(timeout=300)

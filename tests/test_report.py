@@ -1,39 +1,89 @@
-"""`python -m colmo.report` on a real tiny sweep: Table I, the runs, the best policies, the figure."""
+"""`colmo-report` on runs logged as colmo's tracker logs them (params of real composed configs,
+metric histories at step = samples, best_policy.py): Table I with held-out scores, the runs that
+count and those left out (repeats, unfinished runs), variants, the x axes, and a new output
+directory every time. The report of a real sweep is read in tests/test_track.py."""
 
-import json
-import statistics
-import subprocess
-import sys
+import dataclasses
+import tempfile
+from pathlib import Path
 
 import pytest
+from conftest import compose
+from mlflow.entities import Metric
 from PIL import Image
 
-from colmo.report import main, mean_std
+from colmo.report import AXES, default_out, main, mean_std, read_runs
+from colmo.track import flatten, open_experiment
+
+START = 1_700_000_000_000  # ms; runs start a minute apart, in the order they are logged
+
+
+@dataclasses.dataclass
+class Logged:
+    name: str
+    method: str
+    seed: int
+    best: list[float]  # at samples 4, 8
+    heldout: float | None
+
+
+def log_run(client, experiment_id, index: int, run: Logged, *overrides: str, status: str = "FINISHED", seconds: bool = True, tags=None) -> str:
+    cfg = compose("search", f"gfo={run.method}", "gfo.budget=3", f"seed={run.seed}", *overrides)
+    mlflow_run = client.create_run(
+        experiment_id, start_time=START + 60_000 * index, run_name=run.name,
+        tags={"colmo.command": "search", "overrides": " ".join(overrides), **(tags or {})},
+    )
+    run_id = mlflow_run.info.run_id
+    params = flatten(dataclasses.asdict(cfg)) | {"spec.observation_size": "3", "spec.action_size": "1"}
+    for key, value in params.items():
+        client.log_param(run_id, key, value)
+    metrics = []
+    for batch, best in enumerate(run.best):
+        step = 4 * (batch + 1)
+        values = {"best_score": best, "best_score_island_0": best, "best_score_island_1": best / 2, "evaluations": 10.0 * step, "samples": step}
+        if seconds:
+            values["seconds"] = 2.0 * step
+        metrics += [Metric(key, value, START, step) for key, value in values.items()]
+    if run.heldout is not None:
+        metrics.append(Metric("best_heldout_score", run.heldout, START, 8))
+    client.log_batch(run_id, metrics=metrics)
+    with tempfile.TemporaryDirectory() as scratch:
+        policy = Path(scratch) / "best_policy.py"
+        policy.write_text(f"def policy(obs):\n    return {run.best[-1]}  # {run.name}\n")
+        client.log_artifact(run_id, str(policy))
+    client.set_terminated(run_id, status, end_time=START + 60_000 * index + 30_000)
+    return run_id
+
+
+COUNTED = [
+    Logged("none-s0", "none", 0, [100.0, 200.0], 180.0),
+    Logged("none-s1", "none", 1, [50.0, 100.0], 90.0),
+    Logged("opo-s1", "oneplusone", 1, [300.0, 420.0], 400.0),
+    Logged("opo-s0", "oneplusone", 0, [250.0, 380.0], None),
+]
+REPEAT = Logged("opo-s0-older", "oneplusone", 0, [1.0, 2.0], 1.0)  # same settings and seed as opo-s0, started before it
 
 
 @pytest.fixture(scope="module")
-def report(tmp_path_factory):
-    """gfo=none,oneplusone × seeds 0,1 on pendulum, tiny, then the report of that experiment."""
+def store(tmp_path_factory):
+    """An experiment with the runs above, a repeat, a failed run, a sweep parent and a
+    colmo-optimize run, in <cwd>/mlruns.db."""
     cwd = tmp_path_factory.mktemp("report")
-    sweep = subprocess.run(
-        [sys.executable, "-m", "colmo", "-m", "gfo=none,oneplusone", "seed=0,1", "gfo.budget=3", "search.max_samples=8",
-         "task.episodes=2", "llm.batch_size=4", "executor.workers=1", "search.progress=false", f"hydra.sweep.dir={cwd / 'multirun'}"],
-        cwd=cwd, capture_output=True, text=True, timeout=300,
-    )
-    assert sweep.returncode == 0, sweep.stderr
-    result = subprocess.run(
-        [sys.executable, "-m", "colmo.report", "experiment=pendulum", "out=out"], cwd=cwd, capture_output=True, text=True, timeout=120
-    )
-    assert result.returncode == 0, result.stderr
-    assert result.stdout.strip() == "out/report.md"
-    summaries = {}
-    for run_dir in (path.parent for path in (cwd / "multirun").glob("*/summary.json")):
-        overrides = (run_dir / ".hydra" / "overrides.yaml").read_text()
-        summaries[("none" if "gfo=none" in overrides else "oneplusone", "seed=1" in overrides)] = (
-            json.loads((run_dir / "summary.json").read_text()), run_dir
-        )
-    assert len(summaries) == 4
-    return cwd / "out", summaries
+    client, experiment_id = open_experiment(f"sqlite:///{cwd / 'mlruns.db'}", "pendulum")
+    log_run(client, experiment_id, 0, REPEAT)
+    for index, run in enumerate(COUNTED, start=1):
+        log_run(client, experiment_id, index, run)
+    log_run(client, experiment_id, 5, Logged("crashed", "oneplusone", 2, [10.0], None), status="FAILED")
+    log_run(client, experiment_id, 6, Logged("sweep parent", "none", 0, [200.0], None), tags={"colmo.sweep": "abc"})
+    log_run(client, experiment_id, 7, Logged("tuned", "oneplusone", 0, [999.0], None), tags={"colmo.command": "optimize"})
+    return cwd, client
+
+
+def report(cwd: Path, monkeypatch, capsys, *args: str) -> str:
+    monkeypatch.chdir(cwd)
+    main(["experiment=pendulum", *args])
+    out = capsys.readouterr().out.strip()
+    return (cwd / out).read_text()
 
 
 def table(markdown: str, heading: str) -> list[list[str]]:
@@ -44,53 +94,91 @@ def table(markdown: str, heading: str) -> list[list[str]]:
     return [[cell.strip() for cell in row.strip("|").split("|")] for row in rows if not row.startswith("|---")]
 
 
-def test_table_one_has_the_paper_columns_and_seed_statistics(report):
-    out, summaries = report
-    rows = table((out / "report.md").read_text(), "Table I")
-    assert rows[0] == ["Task", "State dim", "Action dim", "GFO", "Reward, no GFO", "Reward, GFO", "Target",
-                       "Samples to target, no GFO", "Samples to target, GFO"]
-    assert len(rows) == 2  # one task, one GFO variant
+def test_table_one_has_training_and_heldout_rewards_over_the_seeds(store, monkeypatch, capsys):
+    cwd, _ = store
+    rows = table(report(cwd, monkeypatch, capsys, "out=table"), "Table I")
+    assert rows[0] == ["Task", "State dim", "Action dim", "GFO", "Reward, no GFO", "Reward, GFO", "Held-out, no GFO", "Held-out, GFO",
+                       "Target", "Samples to target, no GFO", "Samples to target, GFO"]
+    assert len(rows) == 2
     row = rows[1]
-    assert row[:4] == ["pendulum", "3", "1", "oneplusone, budget 3"] and row[6] == "400"
-    for cell, method in ((row[4], "none"), (row[5], "oneplusone")):
-        scores = [summaries[(method, seed)][0]["best_score"] for seed in (False, True)]
-        assert cell.strip("*") == f"{statistics.mean(scores):.1f} ± {statistics.stdev(scores):.1f}"
-    assert all(cell == "—" or "seeds)" in cell for cell in row[7:])
+    assert row[:4] == ["pendulum", "3", "1", "oneplusone, budget 3"] and row[8] == "400"
+    assert row[4] == mean_std([200.0, 100.0]) and row[5] == f"**{mean_std([420.0, 380.0])}**"  # the repeat does not count
+    assert row[6] == mean_std([180.0, 90.0]) and row[7] == "**400.0 (1/2 seeds)**"
+    assert row[9] == "not reached (0/2 seeds)" and row[10] == "8 (1/2 seeds)"
 
 
-def test_runs_and_best_policies_come_from_the_tracked_runs(report):
-    out, summaries = report
-    markdown = (out / "report.md").read_text()
+def test_every_run_is_accounted_for(store, monkeypatch, capsys):
+    cwd, _ = store
+    markdown = report(cwd, monkeypatch, capsys, "out=accounted")
+    assert "6 search runs read from MLflow" in markdown and "4 count, 2 left out" in markdown
     runs = table(markdown, "Runs")
-    assert len(runs) == 5 and {r[0] for r in runs[1:]} == {
-        f"pendulum-{m}-mutate-s{s}" for m in ("none", "oneplusone") for s in (0, 1)
-    }
-    for method, heading in (("none", "pendulum, no GFO"), ("oneplusone", "pendulum, oneplusone, budget 3")):
-        best_summary, run_dir = max((summaries[(method, seed)] for seed in (False, True)), key=lambda s: s[0]["best_score"])
-        section = markdown.split(f"### {heading}\n", 1)[1]
-        code = section.split("```python\n", 1)[1].split("```", 1)[0]
-        assert code.strip() == (run_dir / "best_policy.py").read_text().strip()
+    assert sorted(r[0] for r in runs[1:]) == sorted(run.name for run in COUNTED)
+    left_out = markdown.split("## Runs left out\n", 1)[1].split("## ")[0]
+    assert "`opo-s0-older`" in left_out and "repeat of `opo-s0`" in left_out
+    assert "`crashed`" in left_out and "status FAILED" in left_out
+    assert "sweep parent" not in markdown and "tuned" not in markdown  # not searches
+    # each variant's best policy, from its best run's artifact
+    section = markdown.split("### pendulum, oneplusone, budget 3\n", 1)[1]
+    assert "run `opo-s1`, score 420.0" in section and "return 420.0  # opo-s1" in section
 
 
-def test_figure_is_a_readable_png(report):
-    out, _ = report
-    path = out / "best_so_far.png"
-    with Image.open(path) as image:
-        width, height = image.size
-        assert image.format == "PNG"
-    assert 600 <= width <= 3000 and 400 <= height <= 2000
-    assert path.stat().st_size > 10_000  # curves, labels and legend, not an empty canvas
+def test_axes_use_the_logged_evaluations_and_seconds(store):
+    _, client = store
+    for axis, scale in (("samples", 1.0), ("evaluations", 10.0), ("seconds", 2.0)):
+        curves = read_runs(client, ["pendulum"], axis).curves
+        assert len(curves) == 4
+        for curve in curves:
+            assert curve.steps == [4, 8] and curve.x == [4 * scale, 8 * scale], axis
+    assert set(AXES) == {"samples", "evaluations", "seconds"}
 
 
-def test_bad_command_lines_fail_in_one_line(report, tmp_path, monkeypatch, capsys):
-    out, _ = report
-    for cwd, args, message in (
-        (out.parent, ["experiment=nope"], "no MLflow experiment named 'nope'"),
+def test_a_run_without_the_axis_metric_is_left_out_of_that_axis_only(store):
+    cwd, _ = store
+    client, experiment_id = open_experiment(f"sqlite:///{cwd / 'mlruns.db'}", "old")  # an experiment of its own
+    log_run(client, experiment_id, 0, Logged("old", "none", 0, [5.0, 6.0], None), seconds=False)
+    assert len(read_runs(client, ["old"], "evaluations").curves) == 1
+    reading = read_runs(client, ["old"], "seconds")
+    assert reading.curves == [] and "no `seconds` metric" in reading.left_out[0][1]
+
+
+def test_settings_that_differ_name_the_variants(store):
+    cwd, _ = store
+    client, experiment_id = open_experiment(f"sqlite:///{cwd / 'mlruns.db'}", "islands")
+    log_run(client, experiment_id, 0, Logged("a", "oneplusone", 0, [5.0], None), "database.num_islands=5")
+    log_run(client, experiment_id, 1, Logged("b", "oneplusone", 0, [6.0], None), "database.num_islands=10")
+    log_run(client, experiment_id, 2, Logged("c", "oneplusone", 0, [7.0], None), "database.num_islands=10", "tracker.run_name=x", "executor.workers=1")
+    curves = read_runs(client, ["islands"]).curves
+    # "c" repeats "b": the tracker and executor settings do not change what a search finds
+    assert sorted((c.run.info.run_name, c.variant) for c in curves) == [
+        ("a", "oneplusone, budget 3, database.num_islands=5"), ("c", "oneplusone, budget 3, database.num_islands=10"),
+    ]
+
+
+def test_the_report_goes_to_a_new_directory_and_never_overwrites_one(store, monkeypatch, capsys):
+    cwd, _ = store
+    monkeypatch.chdir(cwd)
+    main(["experiment=pendulum", "axis=seconds"])
+    path = Path(capsys.readouterr().out.strip())
+    assert path.parent.parent == Path("reports") and path.parent.name.startswith("pendulum_")
+    assert "x: seconds of search (wall clock)" in path.read_text()
+    with Image.open(cwd / path.parent / "best_so_far.png") as image:
+        assert image.format == "PNG" and 600 <= image.size[0] <= 3000
+    with pytest.raises(SystemExit) as exit:
+        main(["experiment=pendulum", f"out={path.parent}"])
+    assert exit.value.code == 2 and "already holds a report" in capsys.readouterr().err
+    assert default_out(["pendulum", "cheetah"]).name.startswith("pendulum+cheetah_")
+
+
+def test_bad_command_lines_fail_in_one_line(store, tmp_path, monkeypatch, capsys):
+    cwd, _ = store
+    for where, args, message in (
+        (cwd, ["experiment=nope"], "no MLflow experiment named 'nope'"),
+        (cwd, ["experiment=pendulum", "axis=hours"], "axis must be one of samples, evaluations, seconds"),
         (tmp_path, ["experiment=pendulum"], "no tracking database"),
         (tmp_path, ["out=x"], "experiment=NAME is required"),
         (tmp_path, ["colour=red"], "expected one of experiment=..."),
     ):
-        monkeypatch.chdir(cwd)
+        monkeypatch.chdir(where)
         with pytest.raises(SystemExit) as exit:
             main(args)
         assert exit.value.code == 2 and message in capsys.readouterr().err

@@ -1,7 +1,8 @@
 """The sandbox's static check, the namespace a program runs in, and the worker protocol.
 
 No worker processes here (see test_hostile.py for hostile programs run end to end): these are
-the rules themselves, each with the program that would break it.
+the rules themselves, each with the program that would break it. The programs that run here
+(`load_policy`) are the tests' own.
 """
 
 from __future__ import annotations
@@ -13,10 +14,12 @@ import pickle
 import numpy as np
 import pytest
 
-from colmo.program import parametrize
-from colmo.sandbox import ForbiddenProgram, _decode, _encode, check_program, compile_policy
-from colmo.task import Evaluation, PolicyFailure, as_action, evaluate_policy
 from colmo.environments.pendulum import PendulumSwingup
+from colmo.evaluation import Evaluation
+from colmo.program import parametrize
+from colmo.sandbox import ForbiddenProgram, check_program
+from colmo.sandbox.namespace import load_policy
+from colmo.task import PolicyFailure, as_action, evaluate_policy
 
 IMPORTS = ("numpy", "math")
 
@@ -42,6 +45,10 @@ def test_the_paper_policies_pass(examples, name):
     "def policy(obs):\n    dir = 1 if obs[0] > 0 else -1\n    type = 'pd'\n    return dir\n",
     "import numpy as np\ndef policy(obs):\n    with np.errstate(all='ignore'):\n        return f'{obs!r}' and np.sign(obs[0]) * (lambda v: v)(1.0)\n",
     "def policy(obs):\n    match obs.shape:\n        case (3,):\n            return 0.0\n    try:\n        pass\n    except ValueError as error:\n        return error.args\n",
+    # Arrays of numbers built every ordinary way, and the class used only to test against.
+    "import numpy as np\ndef policy(obs):\n    a = np.zeros(3, dtype='float32') + np.array([1, 2, 3], dtype=np.int64)\n"
+    "    b = np.asarray(obs).astype('f8').reshape(3)\n    return float(a @ b) if isinstance(obs, (np.ndarray, list)) else 0.0\n",
+    "def policy(obs):\n    mode = 'Object' if obs[0] > 0 else 'ok'\n    return 0.0\n",  # strings that are no dtype
 ])
 def test_ordinary_policies_pass(code):
     assert reason(code) is None
@@ -122,6 +129,22 @@ def test_ordinary_policies_pass(code):
     ("def f():\n    global np", "forbidden: global statement"),
     ("def __del__():\n    pass", "forbidden: __del__"),
     ("import numpy as __builtins__", "forbidden: __builtins__"),
+    # Raw memory: object arrays over buffers hand a program fake objects, hence the real builtins.
+    ("np.ndarray(shape=(1,), dtype='O', buffer=bytearray(8))", "forbidden: .ndarray"),
+    ("np.frombuffer(b, 'float64')\nx = np.zeros(2, buffer=b)", "forbidden: keyword buffer="),
+    ("a = np.zeros(2, dtype='O')", "forbidden: object dtype 'O'"),
+    ("a = np.zeros(2, dtype='|O8')", "forbidden: object dtype '|O8'"),
+    ("a = np.empty(1, dtype=[('a', 'O')])", "forbidden: object dtype 'O'"),
+    ("a = np.empty(1, dtype='object')", "forbidden: object dtype 'object'"),
+    ("a = np.array([1]).astype(object)", "forbidden: object"),
+    ("a = np.empty(1, np.object_)", "forbidden: .object_"),
+    ("obs.resize((100,), refcheck=False)", "forbidden: .resize"),
+    ("np.zeros(2).setflags(write=True)", "forbidden: .setflags"),
+    ("a = np.recarray((1,), formats='f8')", "forbidden: .recarray"),
+    ("f = np.ndarray\nf((1,), 'f8', b)", "forbidden: .ndarray"),
+    # A decorator can rebind a function's name to a shared object, whose attributes the
+    # assignment rule would then let through.
+    ("@(lambda f: np.poly1d)\ndef policy(obs):\n    pass\npolicy.x = 1", "forbidden: decorator on policy"),
 ])
 def test_forbidden(code, expected):
     assert reason("import numpy as np\n" + code) == expected
@@ -143,7 +166,7 @@ def test_spec_declared_imports_are_allowed():
 
 
 def namespace(code: str) -> dict:
-    return compile_policy("import numpy as np\nimport math\n" + code + "\ndef policy(obs):\n    return 0.0\n", IMPORTS)
+    return load_policy("import numpy as np\nimport math\n" + code + "\ndef policy(obs):\n    return 0.0\n", IMPORTS, ()).__globals__
 
 
 def test_builtins_are_an_allowlist_and_print_is_silent(capsys):
@@ -189,27 +212,31 @@ def test_the_policy_gets_a_copy_of_the_observation():
 
     code = "def policy(obs):\n    obs[0] = 0.0\n    return 0.0\n"  # holding the pole upright: 1000 points
     env = ViewingPendulum()
-    honest = evaluate_policy(env, compile_policy("def policy(obs):\n    return 0.0\n", IMPORTS)["policy"], [3])
-    assert evaluate_policy(env, compile_policy(code, IMPORTS)["policy"], [3]) == honest
+    honest = evaluate_policy(env, load_policy("def policy(obs):\n    return 0.0\n", IMPORTS, ()), [3])
+    assert evaluate_policy(env, load_policy(code, IMPORTS, ()), [3]) == honest
 
 
 def test_module_level_constants_read_params():
     program = parametrize("GAIN = 2.5\ndef policy(obs):\n    return GAIN * obs[2]\n")
-    assert compile_policy(program.skeleton, IMPORTS, program.values)["GAIN"] == 2.5
+    assert load_policy(program.skeleton, IMPORTS, program.values).__globals__["GAIN"] == 2.5
 
 
 def test_a_program_without_policy_is_invalid():
     with pytest.raises(ForbiddenProgram, match="^invalid: no callable `policy`"):
-        compile_policy("x = 1\n", IMPORTS)
+        load_policy("x = 1\n", IMPORTS, ())
+
+
+def round_trip(evaluation: Evaluation) -> Evaluation:
+    return Evaluation.from_bytes(evaluation.to_bytes())
 
 
 def test_replies_round_trip_and_reasons_are_truncated():
-    evaluation = Evaluation((1.0, 2.5), None)
-    assert _decode(_encode(evaluation)) == evaluation
-    failed = _decode(_encode(Evaluation((), "exception: ValueError: " + "x" * 10_000)))
+    evaluation = Evaluation((1.0, 2.5), None, steps=2000, raced_out=True, seconds=0.25)
+    assert round_trip(evaluation) == evaluation
+    failed = round_trip(Evaluation((), "exception: ValueError: " + "x" * 10_000))
     assert failed.failure.startswith("exception: ValueError: x") and len(failed.failure) == 500
     # A program chooses its exception messages: no line breaks or terminal escapes reach the logs.
-    assert _decode(_encode(Evaluation((), "exception: ValueError: a\nb\x1b[2J"))).failure == "exception: ValueError: a b [2J"
+    assert round_trip(Evaluation((), "exception: ValueError: a\nb\x1b[2J")).failure == "exception: ValueError: a b [2J"
 
 
 @pytest.mark.parametrize("reply", [
@@ -219,7 +246,9 @@ def test_replies_round_trip_and_reasons_are_truncated():
     json.dumps({"returns": ["1"], "failure": None}).encode(),
     json.dumps({"returns": [], "failure": 3}).encode(),
     json.dumps({"returns": []}).encode(),
+    json.dumps({"returns": [float("nan")], "failure": None, "steps": 1, "raced_out": False, "seconds": 0.0}).encode(),
+    json.dumps({"returns": [1.0], "failure": None, "steps": -1, "raced_out": False, "seconds": 0.0}).encode(),
 ])
 def test_malformed_replies_are_refused(reply):
-    with pytest.raises((ValueError, KeyError, TypeError)):
-        _decode(reply)
+    with pytest.raises(ValueError):
+        Evaluation.from_bytes(reply)

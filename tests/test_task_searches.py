@@ -4,8 +4,8 @@ program beats the starter policy."""
 import os
 
 import pytest
-
 from conftest import compose
+
 from colmo.search import STARTER_SAMPLE, Search
 from colmo.store import ProgramStore
 
@@ -26,12 +26,12 @@ def test_short_search_beats_the_starter(tmp_path, task, episodes):
         pytest.skip("the Unitree A1 model needs MENAGERIE_ROOT (offline Menagerie tree) on this machine")
     cfg = compose(
         "search", f"task={task}", "gfo=oneplusone", "gfo.budget=6", f"task.episodes={episodes}",
-        "search.max_samples=12", "tracker=none", "executor.workers=2", "search.progress=false",
+        "search.max_samples=12", "tracker=none", "executor.workers=2", "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false",
     )
     summary = Search(cfg, tmp_path).run()
     store = ProgramStore(tmp_path / "programs.db")
     starter = next(r for r in store.records() if r.sample == STARTER_SAMPLE)
     store.close()
-    assert summary["samples"] == 12 and summary["stop_reason"] == "max_samples"
-    assert summary["programs_evaluated"] >= 6
-    assert summary["best_score"] > starter.score, (summary["best_score"], starter.score)
+    assert summary.samples == 12 and summary.stop_reason == "max_samples"
+    assert summary.programs_evaluated >= 6
+    assert summary.best_score > starter.score, (summary.best_score, starter.score)

@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 import os
 import re
-from pathlib import Path
 
 import mujoco_menagerie
 import numpy as np
@@ -22,7 +21,6 @@ from colmo.environments.quadruped import Quadruped
 from colmo.spec import load_spec
 from colmo.task import evaluate_policy
 
-SPECS = Path(__file__).resolve().parent.parent / "specs"
 TASKS = ("pendulum", "ball_in_cup", "cheetah", "quadruped", "a1")
 
 
@@ -125,7 +123,7 @@ def test_quadruped_rejects_unknown_reward():
 def task(request):
     """(spec, environment) for one bundled task, built once per module."""
     skip_without_a1(request.param)
-    spec = load_spec(str(SPECS / f"{request.param}.py"))
+    spec = load_spec(f"{request.param}.py")  # a bundled spec, by name
     return spec, spec.make_environment()
 
 

@@ -1,6 +1,9 @@
-"""MLflow tracking: a real `-m` sweep read back from the SQLite store and through `mlflow server`,
-jobs starting together on one fresh store, and the tracker's end states."""
+"""MLflow tracking: a real 2-job `-m` sweep read back from the SQLite store (one parent run, two
+children, unique names, metric columns, a classic ML experiment, the programs table) and through
+`mlflow server`, the report made from it, a tracked `colmo-optimize`, and the tracker's end
+states and table writes on a store of its own."""
 
+import dataclasses
 import json
 import multiprocessing
 import os
@@ -19,13 +22,26 @@ from mlflow import MlflowClient
 from mlflow.exceptions import MlflowException
 from omegaconf import OmegaConf
 
-from colmo.store import SampleRecord
-from colmo.track import MlflowTracker, PROGRAM_COLUMNS, flatten, open_experiment, retry_locked
+from colmo import track
+from colmo.record import BatchReport, SampleRecord, Summary
+from colmo.track import (
+    CLASSIC_ML,
+    EXPERIMENT_KIND_TAG,
+    PROGRAM_COLUMNS,
+    VIEW_TAG,
+    MlflowTracker,
+    TrackedRun,
+    flatten,
+    open_experiment,
+    retry_locked,
+)
 
 TINY = (
-    "gfo=none", "search.max_samples=8", "task.episodes=2", "llm.batch_size=4",
-    "executor.workers=1", "search.progress=false",
+    "search.max_samples=4", "llm.batch_size=2", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2",
+    "evaluation.render=false", "evaluation.simplify=false", "executor.workers=1", "search.progress=false",
 )
+# The run list's columns a person compares runs by.
+KEY_METRICS = ("best_score", "best_heldout_score", "samples", "programs_evaluated", "valid_program_rate", "evaluations_per_second", "steps", "seconds")
 
 
 def _rounded(value):
@@ -41,10 +57,10 @@ def program_rows(run_dir: Path) -> list[tuple]:
     with sqlite3.connect(run_dir / "programs.db") as connection:
         connection.row_factory = sqlite3.Row
         rows = connection.execute("SELECT * FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
-    loads = lambda text: json.loads(text) if text is not None else None
+    loads = lambda text: json.loads(text) if text is not None else None  # noqa: E731
+    fields = {"parents": "parent_keys"}
     return [
-        tuple(_rounded(v) for v in (r["sample"], r["batch"], r["status"], r["island"], r["key"], r["code"],
-                                    loads(r["params"]), r["score"], loads(r["parent_keys"]), r["failure"]))
+        tuple(_rounded(loads(r[fields.get(c, c)]) if c in ("params", "parents") else r[fields.get(c, c)]) for c in PROGRAM_COLUMNS)
         for r in rows
     ]
 
@@ -56,69 +72,106 @@ def table_rows(table: pd.DataFrame) -> list[tuple]:
 
 @pytest.fixture(scope="module")
 def sweep(tmp_path_factory):
-    """Two tiny jobs through Hydra's basic (sequential) launcher, tracked into <cwd>/mlruns.db."""
+    """Two tiny jobs (no GFO and (1+1)-ES) through Hydra's basic launcher, tracked into <cwd>/mlruns.db."""
     cwd = tmp_path_factory.mktemp("sweep")
     result = subprocess.run(
-        [sys.executable, "-m", "colmo", "-m", "seed=0,1", *TINY, f"hydra.sweep.dir={cwd / 'multirun'}"],
-        cwd=cwd, capture_output=True, text=True, timeout=300,
+        [sys.executable, "-m", "colmo", "-m", "gfo=none,oneplusone", "seed=0", *TINY, f"hydra.sweep.dir={cwd / 'multirun'}"],
+        cwd=cwd, capture_output=True, text=True, timeout=600,
     )
     assert result.returncode == 0, result.stderr
     client = MlflowClient(f"sqlite:///{cwd / 'mlruns.db'}")
     experiment = client.get_experiment_by_name("pendulum")
-    runs = client.search_runs([experiment.experiment_id], order_by=["tags.seed ASC"])
+    runs = client.search_runs([experiment.experiment_id], order_by=["attributes.start_time ASC"])
     return cwd, client, experiment, runs
 
 
-def test_sweep_jobs_are_runs_with_params_tags_metrics_programs_and_artifacts(sweep, monkeypatch):
+def test_a_sweep_is_one_parent_run_with_a_child_per_job(sweep):
+    cwd, client, experiment, runs = sweep
+    assert experiment.tags[EXPERIMENT_KIND_TAG] == CLASSIC_ML  # MLflow 3.0-3.4's UI opens it in the classic ML view
+    view = json.loads(experiment.tags[VIEW_TAG])  # the run list's columns in MLflow's UI (ui_path)
+    assert view["orderByKey"] == "metrics.`best_score`" and {f"metrics.`{m}`" for m in KEY_METRICS} <= set(view["selectedColumns"])
+    parents = [run for run in runs if "mlflow.parentRunId" not in run.data.tags]
+    children = [run for run in runs if "mlflow.parentRunId" in run.data.tags]
+    assert len(parents) == 1 and len(children) == 2
+    parent = parents[0]
+    assert {child.data.tags["mlflow.parentRunId"] for child in children} == {parent.info.run_id}
+    assert parent.info.run_name.startswith("pendulum-sweep-") and parent.info.status == "FINISHED"
+    assert parent.data.tags["colmo.sweep_dir"] == str(cwd / "multirun")
+    assert "gfo=none,oneplusone" in parent.data.tags["overrides"].split()
+    assert parent.data.metrics["runs"] == 2
+    assert parent.data.metrics["best_score"] == max(child.data.metrics["best_score"] for child in children)
+
+    names = [child.info.run_name for child in children]
+    assert len(set(names)) == 2
+    for name, gfo, job in zip(sorted(names), ("none", "oneplusone"), (0, 1)):
+        prefix, clock, number = name.rsplit("-", 2)
+        assert prefix == f"pendulum-{gfo}-mutate-s0" and len(clock) == 6 and clock.isdigit() and number == f"j{job}"
+
+
+def test_sweep_jobs_log_params_tags_metric_columns_programs_and_artifacts(sweep, monkeypatch):
     cwd, client, experiment, runs = sweep
     # MlflowClient.load_table finds runs through the global tracking URI, whatever the client's.
     monkeypatch.setenv("MLFLOW_TRACKING_URI", client.tracking_uri)
     assert experiment.artifact_location == str(cwd / "mlartifacts" / "pendulum")
-    assert [run.info.run_name for run in runs] == ["pendulum-none-mutate-s0", "pendulum-none-mutate-s1"]
-    for seed, run in enumerate(runs):
+    children = [run for run in runs if "mlflow.parentRunId" in run.data.tags]
+    for run in children:
         run_dir = Path(run.data.tags["colmo.run_dir"])
         assert run_dir.parent == cwd / "multirun" and run.info.status == "FINISHED"
         summary = json.loads((run_dir / "summary.json").read_text())
 
         # params: the job's resolved config, flattened, and the task's dimensions
         config = OmegaConf.to_container(OmegaConf.load(run_dir / ".hydra" / "config.yaml"), resolve=True)
-        expected = flatten(config) | {"spec.observation_size": "3", "spec.action_size": "1"}
-        assert run.data.params == expected
+        assert run.data.params == flatten(config) | {"spec.observation_size": "3", "spec.action_size": "1"}
         tags = run.data.tags
-        assert (tags["task"], tags["llm"], tags["gfo"], tags["seed"]) == ("pendulum", "mutate", "none", str(seed))
-        assert f"seed={seed}" in tags["overrides"].split() and "gfo=none" in tags["overrides"].split()
+        assert (tags["task"], tags["llm"], tags["seed"], tags["colmo.command"]) == ("pendulum", "mutate", "0", "search")
+        assert f"gfo={tags['gfo']}" in tags["overrides"].split()
         assert tags["colmo.version"] and len(tags.get("mlflow.source.git.commit", "x" * 40)) == 40
 
-        # metrics: one point per batch, at step = samples so far
-        history = client.get_metric_history(run.info.run_id, "best_score")
-        assert [m.step for m in history] == [4, 8]
-        assert history[-1].value == summary["best_score"]
-        islands = [k for k in run.data.metrics if k.startswith("best_score_island_")]
+        # metrics: the key ones as run-list columns (their latest values) ...
+        metrics = run.data.metrics
+        assert set(KEY_METRICS) <= set(metrics), set(KEY_METRICS) - set(metrics)
+        for name in ("best_score", "best_heldout_score", "samples", "programs_evaluated", "evaluations", "steps"):
+            assert metrics[name] == pytest.approx(summary[name]), name
+        # ... and one point per batch, at step = samples so far
+        for name in ("best_score", "evaluations", "seconds", "programs_evaluated", "best_score_island_0"):
+            assert [m.step for m in client.get_metric_history(run.info.run_id, name)] == [2, 4], name
+        islands = [k for k in metrics if k.startswith("best_score_island_")]
         assert len(islands) == config["database"]["num_islands"]
-        for name in ("programs_evaluated", "duplicates", "failures", "evaluations_per_second", "generator_busy", "evaluator_busy"):
-            assert [m.step for m in client.get_metric_history(run.info.run_id, name)] == [4, 8], name
-        evaluated = client.get_metric_history(run.info.run_id, "programs_evaluated")[-1].value
-        assert evaluated == summary["programs_evaluated"]
 
-        # every sample once, in the per-batch files and in the table
-        expected_rows = program_rows(run_dir)
-        assert len(expected_rows) == 8
+        # every sample once, in one table with the code in full, registered once
+        expected = program_rows(run_dir)
+        assert len(expected) == 4
         table = client.load_table(experiment.experiment_id, "programs.json", run_ids=[run.info.run_id])
-        assert table_rows(table) == expected_rows
-        batches = [Path(client.download_artifacts(run.info.run_id, f.path, str(cwd / run.info.run_id)))
-                   for f in client.list_artifacts(run.info.run_id, "programs")]
-        assert [b.name for b in batches] == ["batch_00000.json", "batch_00001.json"]
-        assert table_rows(pd.concat([pd.read_json(b, orient="split") for b in batches])) == expected_rows
+        assert table_rows(table) == expected
+        assert json.loads(tags["mlflow.loggedArtifacts"]) == [{"path": "programs.json", "type": "table"}]
+        heldout = {entry["sample"]: entry["heldout_score"] for entry in summary["heldout"]}
+        for _, row in table.iterrows():
+            if row["sample"] in heldout and heldout[row["sample"]] is not None:
+                assert row["heldout_score"] == pytest.approx(heldout[row["sample"]])
 
         # artifacts
         names = {f.path for f in client.list_artifacts(run.info.run_id)} | {f.path for f in client.list_artifacts(run.info.run_id, "hydra")}
-        assert {"best_policy.py", "summary.json", "best_so_far.png", "hydra/config.yaml", "hydra/overrides.yaml"} <= names
+        assert {"best_policy.py", "summary.json", "best_so_far.png", "programs.json", "programs.html", "hydra/config.yaml", "hydra/overrides.yaml"} <= names
+        assert not any(name.startswith("programs/") for name in names)  # no per-batch files
         best = client.download_artifacts(run.info.run_id, "best_policy.py", str(cwd / run.info.run_id))
         assert Path(best).read_text() == (run_dir / "best_policy.py").read_text()
 
     # load_table joins the table across runs
-    both = client.load_table(experiment.experiment_id, "programs.json", run_ids=[r.info.run_id for r in runs], extra_columns=["run_id"])
-    assert both.groupby("run_id").size().to_dict() == {r.info.run_id: 8 for r in runs}
+    both = client.load_table(experiment.experiment_id, "programs.json", run_ids=[r.info.run_id for r in children], extra_columns=["run_id"])
+    assert both.groupby("run_id").size().to_dict() == {r.info.run_id: 4 for r in children}
+
+
+def test_the_report_reads_the_sweep(sweep):
+    cwd, _, _, runs = sweep
+    result = subprocess.run(
+        [sys.executable, "-m", "colmo.report", "experiment=pendulum", "axis=evaluations", "out=report"],
+        cwd=cwd, capture_output=True, text=True, timeout=300,
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "report/report.md" and not result.stderr.strip()  # no download progress bars
+    markdown = (cwd / "report" / "report.md").read_text()
+    assert "2 search runs read from MLflow" in markdown and "2 count, 0 left out" in markdown
+    assert "| pendulum | 3 | 1 | oneplusone, budget 2 |" in markdown
 
 
 def _free_port() -> int:
@@ -133,7 +186,7 @@ def _post(url: str, body: dict) -> dict:
         return json.load(response)
 
 
-def test_mlflow_server_lists_the_runs_over_rest(sweep):
+def test_mlflow_server_lists_the_runs_nested_over_rest(sweep):
     cwd, _, _, runs = sweep
     port = _free_port()
     base = f"http://127.0.0.1:{port}"
@@ -145,23 +198,24 @@ def test_mlflow_server_lists_the_runs_over_rest(sweep):
         env={**os.environ, "MLFLOW_SERVER_ENABLE_JOB_EXECUTION": "false"},
     )
     try:
-        for _ in range(120):
+        deadline = time.monotonic() + 120
+        while True:
             try:
                 with urllib.request.urlopen(f"{base}/health", timeout=2) as response:
                     if response.status == 200:
                         break
             except OSError:
                 assert server.poll() is None, "mlflow server exited"
+                assert time.monotonic() < deadline, "mlflow server not ready after 120 s"
                 time.sleep(0.5)
-        else:
-            pytest.fail("mlflow server not ready after 60 s")
         experiments = _post(f"{base}/api/2.0/mlflow/experiments/search", {"max_results": 10})["experiments"]
-        experiment_id = next(e["experiment_id"] for e in experiments if e["name"] == "pendulum")
-        found = _post(f"{base}/api/2.0/mlflow/runs/search", {"experiment_ids": [experiment_id]})["runs"]
+        experiment = next(e for e in experiments if e["name"] == "pendulum")
+        assert {"key": EXPERIMENT_KIND_TAG, "value": CLASSIC_ML} in experiment["tags"]
+        found = _post(f"{base}/api/2.0/mlflow/runs/search", {"experiment_ids": [experiment["experiment_id"]]})["runs"]
         assert sorted(r["info"]["run_name"] for r in found) == sorted(r.info.run_name for r in runs)
         for run in found:
             metrics = {m["key"]: m for m in run["data"]["metrics"]}
-            assert metrics["best_score"]["step"] == 8 and run["info"]["status"] == "FINISHED"
+            assert run["info"]["status"] == "FINISHED" and "best_score" in metrics
     finally:
         os.killpg(server.pid, signal.SIGTERM)
         try:
@@ -171,23 +225,28 @@ def test_mlflow_server_lists_the_runs_over_rest(sweep):
             server.wait()
 
 
-def test_jobs_starting_together_share_one_fresh_store(tmp_path):
-    jobs = [
-        subprocess.Popen(
-            [sys.executable, "-m", "colmo", f"seed={seed}", *TINY, f"hydra.run.dir=run{seed}"],
-            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        )
-        for seed in (0, 1)
-    ]
-    for job in jobs:
-        _, stderr = job.communicate(timeout=300)
-        assert job.returncode == 0, stderr
-    client = MlflowClient(f"sqlite:///{tmp_path / 'mlruns.db'}")
-    experiments = [e.name for e in client.search_experiments()]
-    assert experiments.count("pendulum") == 1
-    runs = client.search_runs([client.get_experiment_by_name("pendulum").experiment_id])
-    assert sorted(r.info.run_name for r in runs) == ["pendulum-none-mutate-s0", "pendulum-none-mutate-s1"]
-    assert {r.info.status for r in runs} == {"FINISHED"}
+def test_colmo_optimize_logs_one_run(sweep, examples):
+    cwd, client, _, _ = sweep  # its store, in an experiment of its own
+    result = subprocess.run(
+        [sys.executable, "-m", "colmo.optimize", f"policy_file={examples / 'pendulum_mistuned.py'}", "tracker=mlflow",
+         "tracker.experiment=optimize", "gfo.budget=3", "task.episodes=1", "evaluation.episodes=2", "executor.workers=1",
+         "hydra.run.dir=optimized"],
+        cwd=cwd, capture_output=True, text=True, timeout=300,
+    )
+    assert result.returncode == 0, result.stderr
+    assert "MLflow run" in result.stderr
+    experiment = client.get_experiment_by_name("optimize")
+    assert experiment.tags[EXPERIMENT_KIND_TAG] == CLASSIC_ML
+    (run,) = client.search_runs([experiment.experiment_id])
+    summary = json.loads((cwd / "optimized" / "result.json").read_text())
+    assert run.info.status == "FINISHED" and run.data.tags["colmo.command"] == "optimize"
+    assert run.info.run_name.startswith("pendulum-optimize-oneplusone-pendulum_mistuned-s0-")
+    assert run.data.metrics["score"] == pytest.approx(summary["score"]) and run.data.metrics["evaluations"] == summary["evaluations"]
+    assert run.data.params["gfo.budget"] == "3"
+    assert {f.path for f in client.list_artifacts(run.info.run_id)} >= {"tuned_policy.py", "result.json", "hydra"}
+
+
+# -- the tracker on a store of its own -------------------------------------------------------------
 
 
 def _open_after(barrier, uri: str, queue) -> None:
@@ -210,32 +269,94 @@ def test_open_experiment_is_safe_when_processes_start_at_the_same_instant(tmp_pa
     for worker in workers:
         worker.join(timeout=30)
     assert len(set(results)) == 1 and results[0].isdigit(), results
+    assert MlflowClient(uri).get_experiment(results[0]).tags[EXPERIMENT_KIND_TAG] == CLASSIC_ML
+
+
+def test_an_experiment_made_before_gets_the_classic_kind(store):
+    uri = store
+    experiment_id = MlflowClient(uri).create_experiment("old")
+    assert open_experiment(uri, "old")[1] == experiment_id
+    assert MlflowClient(uri).get_experiment(experiment_id).tags[EXPERIMENT_KIND_TAG] == CLASSIC_ML
 
 
 def _record(sample: int, score: float) -> SampleRecord:
-    return SampleRecord(sample=sample, batch=sample, status="evaluated", island=sample % 2, parent_keys=["k"],
+    return SampleRecord(sample=sample, batch=sample, status="evaluated", island=sample % 2, parent_keys=("k",),
                         generator="mutate", raw="", key=f"k{sample}", code="def policy(obs):\n    return 0.0\n",
-                        params=[0.5], score=score)
+                        params=(0.5,), score=score)
 
 
-def test_interrupted_search_ends_killed_with_its_programs(tmp_path, monkeypatch):
-    uri = f"sqlite:///{tmp_path / 'mlruns.db'}"
-    monkeypatch.setenv("MLFLOW_TRACKING_URI", uri)  # for load_table, as above
+def _report(batch: int, score: float) -> BatchReport:
+    counts = dict(programs_evaluated=batch + 1, duplicates_skipped=0, failures=0, unusable_outputs=0, interrupted=0,
+                  evaluations=3 * (batch + 1), steps=100 * (batch + 1))
+    rates = dict(valid_program_rate=1.0, duplicate_rate=0.0, tokens_per_second=0.0, evaluations_per_second=5.0,
+                 generator_busy=0.1, evaluator_busy=0.9, seconds=float(batch + 1), generation_seconds=0.1, evaluation_seconds=0.2)
+    return BatchReport(batch=batch, samples=batch + 1, best_score=score, best_per_island=(score, 1.0), queue_depth=0, **counts, **rates)
+
+
+def _summary(run_dir: Path, stop_reason: str) -> Summary:
+    values = dict(
+        task="pendulum", best_score=3.0, best_heldout_score=2.5, best_key="k1", best_code=None, samples=2, programs_evaluated=2,
+        evaluations=6, steps=200, seconds=2.0, best_so_far=((0, 1.0), (2, 3.0)), stop_reason=stop_reason, run_dir=str(run_dir),
+        heldout=({"sample": 1, "key": "k1", "score": 3.0, "heldout_score": 2.5, "heldout_failure": None},),
+    )
+    # The other totals as zeros: the tracker logs them with each batch, not from the summary.
+    required = [f for f in dataclasses.fields(Summary) if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+    return Summary(**{f.name: values.get(f.name, 0) for f in required}, **{k: v for k, v in values.items() if k not in {f.name for f in required}})
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory) -> str:
+    """One MLflow store for the tests below (creating MLflow's schema takes seconds)."""
+    uri = f"sqlite:///{tmp_path_factory.mktemp('store') / 'mlruns.db'}"
+    open_experiment(uri, "unit")
+    return uri
+
+
+def _tracked(uri: str) -> TrackedRun:
     client, experiment_id = open_experiment(uri, "unit")
-    run_id = client.create_run(experiment_id).info.run_id
-    tracker = MlflowTracker(client, run_id, hydra_dir=None)
+    return TrackedRun(client, experiment_id, client.create_run(experiment_id).info.run_id, "unit", None, None, None)
+
+
+def test_an_interrupted_search_ends_killed_with_its_programs_table_rewritten_in_place(store, tmp_path, monkeypatch):
+    uri = store
+    monkeypatch.setenv("MLFLOW_TRACKING_URI", uri)  # for load_table, as above
+    monkeypatch.setattr(track, "TABLE_EVERY_S", 0.0)  # rewrite the table after every batch
+    run = _tracked(uri)
+    tracker = MlflowTracker(run)
     for batch, score in enumerate([1.0, 3.0]):
-        report = {"batch": batch, "samples": batch + 1, "best_score": score, "best_per_island": [score, 1.0],
-                  "programs_evaluated": batch + 1, "duplicates": 0, "failures": 0, "generation_seconds": 0.1,
-                  "evaluation_seconds": 0.2, "queue_depth": 0, "evaluations_per_second": 5.0,
-                  "generator_busy": 0.1, "evaluator_busy": 0.9}
-        tracker.on_batch(report, [_record(batch, score)])
-    tracker.on_finish({"task": "pendulum", "run_dir": str(tmp_path), "stop_reason": "interrupted"})
-    run = client.get_run(run_id)
-    assert run.info.status == "KILLED"
-    assert [(m.step, m.value) for m in client.get_metric_history(run_id, "best_score_island_0")] == [(1, 1.0), (2, 3.0)]
-    assert client.load_table(experiment_id, "programs.json", run_ids=[run_id])["sample"].tolist() == [0, 1]
-    assert {f.path for f in client.list_artifacts(run_id)} == {"programs", "programs.json", "best_so_far.png"}
+        tracker.on_batch(_report(batch, score), [_record(batch, score)])
+        table = run.client.load_table(run.experiment_id, "programs.json", run_ids=[run.run_id])
+        assert table["sample"].tolist() == list(range(batch + 1))  # the whole table so far, once
+    tracker.on_finish(_summary(tmp_path, "interrupted"))
+    client = run.client
+    finished = client.get_run(run.run_id)
+    assert finished.info.status == "KILLED"
+    assert [(m.step, m.value) for m in client.get_metric_history(run.run_id, "best_score_island_0")] == [(1, 1.0), (2, 3.0)]
+    assert finished.data.metrics["best_heldout_score"] == 2.5 and finished.data.metrics["samples"] == 2 and finished.data.metrics["seconds"] == 2.0
+    table = client.load_table(run.experiment_id, "programs.json", run_ids=[run.run_id])
+    assert table["sample"].tolist() == [0, 1] and table["heldout_score"].tolist()[1] == 2.5
+    assert table["code"][0] == "def policy(obs):\n    return 0.0\n"  # in full, newlines and all
+    assert json.loads(finished.data.tags["mlflow.loggedArtifacts"]) == [{"path": "programs.json", "type": "table"}]
+    assert {f.path for f in client.list_artifacts(run.run_id)} == {"programs.json", "programs.html", "best_so_far.png"}
+    page = Path(client.download_artifacts(run.run_id, "programs.html", str(tmp_path)))
+    text = page.read_text()
+    assert text.index("<td>1</td><td>3.00</td><td>2.50</td>") < text.index("<td>0</td><td>1.00</td>")  # best first
+    assert "<pre>def policy(obs):\n    return 0.0\n</pre>" in text
+
+
+def test_the_table_is_rewritten_at_most_every_table_every_s(store, tmp_path, monkeypatch):
+    uri = store
+    monkeypatch.setenv("MLFLOW_TRACKING_URI", uri)
+    monkeypatch.setattr(track, "TABLE_EVERY_S", 3600.0)
+    run = _tracked(uri)
+    tracker = MlflowTracker(run)
+    for batch in range(3):
+        tracker.on_batch(_report(batch, 1.0), [_record(batch, 1.0)])
+    # Written at the first batch only (then not for an hour); the end writes every row.
+    assert run.client.load_table(run.experiment_id, "programs.json", run_ids=[run.run_id])["sample"].tolist() == [0]
+    tracker.on_finish(_summary(tmp_path, "max_samples"))
+    assert run.client.get_run(run.run_id).info.status == "FINISHED"
+    assert run.client.load_table(run.experiment_id, "programs.json", run_ids=[run.run_id])["sample"].tolist() == [0, 1, 2]
 
 
 def test_retry_locked_retries_only_a_locked_database():
@@ -264,14 +385,14 @@ def test_flatten_gives_dot_keys_and_json_values():
     }
 
 
-def test_a_process_that_dies_mid_search_leaves_its_run_failed(tmp_path):
-    uri = f"sqlite:///{tmp_path / 'mlruns.db'}"
+def test_a_process_that_dies_mid_search_leaves_its_run_failed(store):
+    uri = store
     script = (
-        "from colmo.track import MlflowTracker, open_experiment\n"
+        "from colmo.track import MlflowTracker, TrackedRun, open_experiment\n"
         f"client, experiment_id = open_experiment({uri!r}, 'unit')\n"
         "run_id = client.create_run(experiment_id).info.run_id\n"
         "print(run_id)\n"
-        "MlflowTracker(client, run_id, hydra_dir=None)\n"
+        "MlflowTracker(TrackedRun(client, experiment_id, run_id, 'unit', None, None, None))\n"
         "raise RuntimeError('the search crashed')\n"
     )
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)

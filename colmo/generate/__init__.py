@@ -1,36 +1,26 @@
-"""Producing candidate programs from a prompt, behind one interface and a registry:
-the embedded mutation baseline (`mutate`), OpenAI-compatible servers (`openai_server`) and
-in-process vLLM (`vllm_engine`). `make_generator(cfg.llm, seed)` builds the one `llm.name` names.
+"""Producing candidate programs from a prompt, behind one interface (`base.Generator`) and one
+registry (`base.GENERATORS`) that each generator joins where it is defined (`@register`): the
+embedded mutation baseline (`mutate`), OpenAI-compatible servers (`openai_server`), in-process
+vLLM (`vllm_engine`) and in-process llama.cpp (`llamacpp_engine`). `make_generator(cfg.llm, seed)`
+builds the one `llm.name` names.
 """
 
 from __future__ import annotations
 
-from typing import Callable, Optional
+from typing import Optional
 
-from colmo.config import ConfigError, GeneratorConfig
-from colmo.generate.base import Generation, Generator, GeneratorError
-from colmo.generate.mutate import MutateGenerator
-from colmo.generate.openai_server import OpenAIGenerator
-from colmo.generate.vllm_engine import VLLMGenerator
+from colmo.errors import ConfigError
+from colmo.generate import llamacpp_engine, mutate, openai_server, vllm_engine  # noqa: F401 - they register
+from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe
 
-__all__ = [
-    "GENERATORS", "Generation", "Generator", "GeneratorError", "MutateGenerator", "OpenAIGenerator",
-    "VLLMGenerator", "make_generator",
-]
-
-GENERATORS: dict[str, type[Generator]] = {
-    "mutate": MutateGenerator,
-    "openai": OpenAIGenerator,
-    "vllm": VLLMGenerator,
-}
+__all__ = ["GENERATORS", "Generation", "Generator", "GeneratorError", "Probe", "make_generator"]
 
 
-def make_generator(cfg: GeneratorConfig, seed: int, probe: Optional[Callable[[str], bool]] = None) -> Generator:
+def make_generator(cfg, seed: int, probe: Optional[Probe] = None) -> Generator:
     """The generator `cfg.name` names, configured by `cfg` (the `llm` config group). `probe(code)`
-    says whether a program runs on the task (see `colmo.sandbox.ProgramProbe`); the embedded
-    generator uses it to offer only working children."""
-    if cfg.name not in GENERATORS:
-        raise ConfigError(f"llm.name must be one of {', '.join(GENERATORS)}; got {cfg.name!r}")
-    if cfg.name == "mutate":
-        return MutateGenerator(cfg, seed, probe)
-    return GENERATORS[cfg.name](cfg, seed)
+    says whether a program runs on the task; it reaches only generators that want one (`mutate`
+    offers only working children)."""
+    cls = GENERATORS.get(cfg.name)
+    if cls is None:
+        raise ConfigError(f"llm.name must be one of {', '.join(sorted(GENERATORS))}; got {cfg.name!r}")
+    return cls(cfg, seed, probe if cls.wants_probe else None)

@@ -5,11 +5,12 @@
 from __future__ import annotations
 
 import abc
+import importlib
 import logging
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, Optional, Sequence, TypeVar
 
-from colmo.config import one_line
+from colmo.errors import one_line
 
 if TYPE_CHECKING:
     from colmo.prompt import Prompt
@@ -24,6 +25,7 @@ class Generation:
     prompt_tokens: int = 0
     completion_tokens: int = 0
     seconds: float = 0.0
+    prefix: str = ""  # the prompt text the raw output continues; extraction reads prefix + text
 
 
 class GeneratorError(RuntimeError):
@@ -31,13 +33,53 @@ class GeneratorError(RuntimeError):
     missing); the message is one line."""
 
 
+# A probe says whether a program runs on the task (`colmo.generate.probe.ProgramProbe`).
+Probe = Callable[[str], bool]
+
+
 class Generator(abc.ABC):
+    """Turns prompts into raw texts. Subclasses register under their `llm.name` with `@register`
+    and are built as `cls(cfg, seed, probe)`; `probe` is None unless `wants_probe`."""
+
+    wants_probe: ClassVar[bool] = False
+
+    def __init__(self, cfg, seed: int, probe: Optional[Probe] = None) -> None:
+        self.cfg = cfg
+        self.probe = probe
+
     @abc.abstractmethod
     def generate(self, prompt: Prompt, n: int) -> list[Generation]:
         """Up to `n` candidate programs for `prompt`."""
 
+    def cancel(self) -> None:
+        """Abandon the generation in flight, where the generator can (the search is stopping);
+        `generate` may then return early, and its result is discarded."""
+
     def close(self) -> None:
         """Release connections, threads or GPU memory."""
+
+
+def import_library(module: str, package: str, llm: str) -> Any:
+    """The optional library `llm=<llm>` runs on; `GeneratorError` saying how to install it (the
+    extra of colmo named like the generator)."""
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise GeneratorError(f"llm={llm} needs {package}: pip install 'colmo[{llm}]'") from None
+
+
+GENERATORS: dict[str, type[Generator]] = {}
+G = TypeVar("G", bound=type[Generator])
+
+
+def register(name: str) -> Callable[[G], G]:
+    """Class decorator: make a generator available as `llm=<name>`."""
+
+    def add(cls: G) -> G:
+        GENERATORS[name] = cls
+        return cls
+
+    return add
 
 
 def batch_of(

@@ -1,32 +1,44 @@
-"""`llm=openai`: any OpenAI-compatible chat-completions server.
+"""`llm=openai`: any OpenAI-compatible server (vllm serve, Ollama, llama.cpp, OpenAI).
 
-openai talks to any OpenAI-compatible chat-completions endpoint (vllm serve, Ollama, llama.cpp,
-OpenAI) with the official client. It asks for `n` choices in one request when `use_n`; a
-server that returns fewer is asked one completion per request from then on, in parallel.
+openai talks to an OpenAI-compatible endpoint with the official client: chat completions
+(`/v1/chat/completions`, `prompt_format=chat`) or completions of the prompt text
+(`/v1/completions`, `prompt_format=completion`, stopping at the next top-level definition). It
+asks for `n` choices in one request when `use_n`; a server that returns fewer (llama.cpp and
+Ollama ignore `n`) is asked one completion per request from then on, in parallel.
+
+At most `max_concurrency` requests are in flight per server; the others wait here, before they
+are sent, so a request's `timeout_s` counts from when it is sent, not while it is queued (a
+one-slot llama.cpp server answers one request at a time; sent together, the last ones would
+time out in its queue). Requests go round robin over the servers of `base_url` that have a free
+slot, skipping a server for `max_backoff_s` after it fails.
+
 Retries are its own (visible in the log, configurable): connection errors, timeouts, HTTP 408,
 409, 429, 5xx and unusable answers are retried with exponential backoff and full jitter, up to
 `max_retries` times per request; a request that runs out of retries is dropped, so a batch can
-come back short. Requests go round robin over `base_url`, skipping a server for
-`max_backoff_s` after it fails. `max_consecutive_failures` failed attempts in a row, over all
-servers, or any other HTTP error (a wrong model name, a bad key), raise `GeneratorError`.
+come back short. `max_consecutive_failures` failed attempts in a row, over all servers, or any
+other HTTP error (a wrong model name, a bad key), raise `GeneratorError`. `cancel()` sends no
+more requests and retries none; requests in flight end on their own.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import os
 import random
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any
+from typing import Any, Optional
 
 import openai
 
-from colmo.config import OpenAIConfig, one_line
-from colmo.generate.base import Generation, Generator, GeneratorError, batch_of, describe_error, logger
-from colmo.prompt import Prompt
+from colmo.config import OpenAIConfig
+from colmo.errors import one_line
+from colmo.generate.base import Generation, Generator, GeneratorError, Probe, batch_of, describe_error, logger, register
+from colmo.prompt import COMPLETION_STOP, Prompt
 
+_CHECK_TIMEOUT_S = 5.0
 _RETRYABLE_STATUS = frozenset({408, 409, 429})
 
 
@@ -34,11 +46,14 @@ class _UnusableAnswer(ValueError):
     """A 200 answer with no completion text in it."""
 
 
-def _texts(response: Any) -> list[str]:
+def _texts(response: Any, chat: bool) -> list[str]:
     """The non-empty completion texts of an answer; `_UnusableAnswer` if there are none (servers
     and proxies can answer 200 with HTML, an error object or empty choices)."""
     choices = getattr(response, "choices", None) or []
-    texts = [getattr(getattr(choice, "message", None), "content", None) for choice in choices]
+    if chat:
+        texts = [getattr(getattr(choice, "message", None), "content", None) for choice in choices]
+    else:
+        texts = [getattr(choice, "text", None) for choice in choices]
     texts = [text for text in texts if isinstance(text, str) and text.strip()]
     if not texts:
         raise _UnusableAnswer(f"no completion text in the answer ({len(choices)} choices)")
@@ -54,49 +69,79 @@ class _Server:
         self.url = url
         self.client = client
         self.failed_at = -float("inf")
+        self.in_flight = 0
 
 
+@register("openai")
 class OpenAIGenerator(Generator):
-    """Chat completions from OpenAI-compatible servers, with our own retries and failover."""
+    """Completions from OpenAI-compatible servers, with per-server concurrency limits, our own
+    retries and failover."""
 
-    def __init__(self, cfg: OpenAIConfig, seed: int):
-        self.cfg = cfg
+    def __init__(self, cfg: OpenAIConfig, seed: int, probe: Optional[Probe] = None):
+        super().__init__(cfg, seed, probe)
         api_key = os.environ.get(cfg.api_key_env) or "EMPTY"  # local servers want no key, the client wants one
         self._servers = [
             _Server(url, openai.OpenAI(base_url=url, api_key=api_key, timeout=cfg.timeout_s, max_retries=0))
             for url in cfg.base_url
         ]
         self._turn = itertools.count()
-        self._lock = threading.Lock()
+        self._lock = threading.Condition()  # guards the servers' state; notified when a slot frees
+        self._stopped = False  # cancelled or closed: nothing more is sent
         self._failures = 0  # consecutive failed attempts, all servers together
         self._use_n = cfg.use_n
         self._seeds = random.Random(seed)
         self._pool = ThreadPoolExecutor(max_workers=cfg.batch_size, thread_name_prefix="colmo-openai")
+        self._check_servers()
+
+    def _check_servers(self) -> None:
+        """At least one server answers (any HTTP answer counts) within `_CHECK_TIMEOUT_S`, so a
+        run without one ends at once, saying how to start one; the others are logged."""
+        silent = []
+        for server in self._servers:
+            try:
+                server.client.with_options(timeout=min(_CHECK_TIMEOUT_S, self.cfg.timeout_s)).models.list()
+            except openai.APIStatusError:
+                pass  # it answered
+            except openai.APIError as error:
+                silent.append(f"{server.url} ({describe_error(error)})")
+        if len(silent) == len(self._servers):
+            self.close()
+            raise GeneratorError(
+                f"no OpenAI-compatible server answers at {', '.join(silent)}; start one, e.g. "
+                f"`vllm serve {self.cfg.model}` or `python -m llama_cpp.server --model FILE.gguf`, and pass its URL as llm.base_url"
+            )
+        for server in silent:
+            logger.warning("openai: %s does not answer; using the other servers until it does", server)
 
     def generate(self, prompt: Prompt, n: int) -> list[Generation]:
-        generations = self._complete(prompt.messages, n, self._seeds.randrange(2**31)) if self._use_n and n > 1 else []
+        generations = self._complete(prompt, n, self._seeds.randrange(2**31)) if self._use_n and n > 1 else []
         seeds = [self._seeds.randrange(2**31) for _ in range(n - len(generations))]
-        for batch in self._pool.map(lambda seed: self._complete(prompt.messages, 1, seed), seeds):
+        for batch in self._pool.map(lambda seed: self._complete(prompt, 1, seed), seeds):
             generations += batch
         return generations
 
+    def cancel(self) -> None:
+        with self._lock:
+            self._stopped = True
+            self._lock.notify_all()
+
     def close(self) -> None:
+        self.cancel()
         self._pool.shutdown(wait=False, cancel_futures=True)
         for server in self._servers:
             server.client.close()
 
-    def _complete(self, messages: list[dict[str, str]], n: int, seed: int) -> list[Generation]:
+    def _complete(self, prompt: Prompt, n: int, seed: int) -> list[Generation]:
         """One request, retried; its generations, or none once its retries are spent."""
         cfg = self.cfg
         for attempt in range(cfg.max_retries + 1):
-            server = self._pick_server()
+            server = self._acquire()
+            if server is None:
+                return []
             start = time.perf_counter()
             try:
-                response = server.client.chat.completions.create(
-                    model=cfg.model, messages=messages, temperature=cfg.temperature, top_p=cfg.top_p,
-                    max_tokens=cfg.max_tokens, seed=seed, **({"n": n} if n > 1 else {}),
-                )
-                texts = _texts(response)
+                response = self._send(server, prompt, n, seed)
+                texts = _texts(response, cfg.prompt_format == "chat")
             except openai.APIStatusError as error:
                 if error.status_code not in _RETRYABLE_STATUS and error.status_code < 500:
                     message = f"{server.url} refused the request: HTTP {error.status_code}: {one_line(error)}"
@@ -106,8 +151,10 @@ class OpenAIGenerator(Generator):
                 # ValueError: a body that is not JSON, or `_UnusableAnswer`.
                 reason = self._failed(server, error)
             else:
-                return self._succeeded(server, response, texts, n, time.perf_counter() - start)
-            if attempt < cfg.max_retries:
+                return self._succeeded(server, prompt, response, texts, n, time.perf_counter() - start)
+            finally:
+                self._release(server)
+            if attempt < cfg.max_retries and not self._stopped:
                 # Full jitter: requests that failed together do not all come back together.
                 delay = random.uniform(0.0, min(cfg.max_backoff_s, cfg.backoff_s * 2**attempt))
                 logger.warning(
@@ -117,16 +164,45 @@ class OpenAIGenerator(Generator):
         logger.warning("openai: dropping a request after %d attempts; the last failed with %s", cfg.max_retries + 1, reason)
         return []
 
-    def _pick_server(self) -> _Server:
-        """Round robin over the servers that have not failed in the last `max_backoff_s`; if all
-        have, the one that failed longest ago."""
+    def _send(self, server: _Server, prompt: Prompt, n: int, seed: int) -> Any:
+        cfg = self.cfg
+        sampling = dict(
+            model=cfg.model, temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=seed,
+            **({"n": n} if n > 1 else {}),
+        )
+        if cfg.prompt_format == "chat":
+            return server.client.chat.completions.create(messages=prompt.messages, **sampling)
+        return server.client.completions.create(prompt=prompt.text, stop=list(COMPLETION_STOP), **sampling)
+
+    def _acquire(self) -> Optional[_Server]:
+        """A slot on a server, waiting until one frees: round robin over the servers that have
+        not failed in the last `max_backoff_s`; if all have, the one that failed longest ago.
+        None once the generator is cancelled."""
+        limit, backoff = self.cfg.max_concurrency, self.cfg.max_backoff_s
         with self._lock:
-            now = time.monotonic()
-            for _ in range(len(self._servers)):
-                server = self._servers[next(self._turn) % len(self._servers)]
-                if now - server.failed_at >= self.cfg.max_backoff_s:
+            while True:
+                if self._stopped:
+                    return None
+                now = time.monotonic()
+                healthy = [s for s in self._servers if now - s.failed_at >= backoff]
+                for _ in range(len(self._servers)):
+                    server = self._servers[next(self._turn) % len(self._servers)]
+                    if server in healthy and server.in_flight < limit:
+                        break
+                else:
+                    free = [s for s in self._servers if s.in_flight < limit]
+                    server = min(free, key=lambda s: s.failed_at) if free and not healthy else None
+                if server is not None:
+                    server.in_flight += 1
                     return server
-            return min(self._servers, key=lambda s: s.failed_at)
+                # Wake when a slot frees, or when a failed server's back-off ends.
+                ends = [s.failed_at + backoff - now for s in self._servers if s not in healthy]
+                self._lock.wait(timeout=min(ends) if ends else None)
+
+    def _release(self, server: _Server) -> None:
+        with self._lock:
+            server.in_flight -= 1
+            self._lock.notify_all()
 
     def _failed(self, server: _Server, error: BaseException) -> str:
         """Record a failed attempt; its reason, or `GeneratorError` once too many failed in a row."""
@@ -139,7 +215,9 @@ class OpenAIGenerator(Generator):
             raise GeneratorError(f"no OpenAI-compatible server answered after {failures} attempts: {reason}") from error
         return reason
 
-    def _succeeded(self, server: _Server, response: Any, texts: list[str], n: int, seconds: float) -> list[Generation]:
+    def _succeeded(
+        self, server: _Server, prompt: Prompt, response: Any, texts: list[str], n: int, seconds: float
+    ) -> list[Generation]:
         with self._lock:
             self._failures = 0
             server.failed_at = -float("inf")
@@ -156,5 +234,7 @@ class OpenAIGenerator(Generator):
             "openai: %s: %d completions, %d prompt + %d completion tokens, %.1fs",
             server.url, len(texts), prompt_tokens, completion_tokens, seconds,
         )
-        name = f"openai:{self.cfg.model}@{server.url}"
-        return batch_of(texts, name, prompt_tokens, _split(completion_tokens, len(texts)), seconds)
+        generations = batch_of(texts, f"openai:{self.cfg.model}@{server.url}", prompt_tokens, _split(completion_tokens, len(texts)), seconds)
+        if self.cfg.prompt_format == "chat":
+            return generations
+        return [dataclasses.replace(generation, prefix=prompt.text) for generation in generations]

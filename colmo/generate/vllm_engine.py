@@ -1,27 +1,30 @@
 """`llm=vllm`: in-process batched generation on local GPUs.
 
 vllm runs `vllm.LLM` in this process (`pip install 'colmo[vllm]'`) and samples the batch as the
-`n` outputs of one request through the model's chat template.
+`n` outputs of one request: the chat messages through the model's chat template
+(`prompt_format=chat`), or the prompt text continued up to the next top-level definition
+(`prompt_format=completion`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import random
 import time
+from typing import Optional
 
 from colmo.config import VLLMConfig
-from colmo.generate.base import Generation, Generator, GeneratorError, batch_of, describe_error, logger
-from colmo.prompt import Prompt
+from colmo.generate.base import Generation, Generator, GeneratorError, Probe, batch_of, describe_error, import_library, logger, register
+from colmo.prompt import COMPLETION_STOP, Prompt
 
+
+@register("vllm")
 class VLLMGenerator(Generator):
-    """`vllm.LLM` in this process; the batch is the `n` outputs of one chat request."""
+    """`vllm.LLM` in this process; the batch is the `n` outputs of one request."""
 
-    def __init__(self, cfg: VLLMConfig, seed: int):
-        try:
-            import vllm
-        except ImportError:
-            raise GeneratorError("llm=vllm needs vLLM: pip install 'colmo[vllm]'") from None
-        self.cfg = cfg
+    def __init__(self, cfg: VLLMConfig, seed: int, probe: Optional[Probe] = None):
+        super().__init__(cfg, seed, probe)
+        vllm = import_library("vllm", "vLLM", "vllm")
         self.name = f"vllm:{cfg.model}"
         self._sampling_params = vllm.SamplingParams
         # The engine seed is the config's; each request gets its own seed, or the same prompt
@@ -38,11 +41,16 @@ class VLLMGenerator(Generator):
 
     def generate(self, prompt: Prompt, n: int) -> list[Generation]:
         cfg = self.cfg
+        chat = cfg.prompt_format == "chat"
         params = self._sampling_params(
-            n=n, temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self._seeds.randrange(2**31)
+            n=n, temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self._seeds.randrange(2**31),
+            **({} if chat else {"stop": list(COMPLETION_STOP)}),
         )
         start = time.perf_counter()
-        [output] = self._llm.chat(prompt.messages, sampling_params=params, use_tqdm=False)
+        if chat:
+            [output] = self._llm.chat(prompt.messages, sampling_params=params, use_tqdm=False)
+        else:
+            [output] = self._llm.generate([prompt.text], sampling_params=params, use_tqdm=False)
         seconds = time.perf_counter() - start
         prompt_tokens = len(output.prompt_token_ids or ())
         completion_tokens = [len(completion.token_ids) for completion in output.outputs]
@@ -50,7 +58,8 @@ class VLLMGenerator(Generator):
             "vllm: %d completions, %d prompt + %d completion tokens, %.1fs",
             len(output.outputs), prompt_tokens, sum(completion_tokens), seconds,
         )
-        return batch_of([completion.text for completion in output.outputs], self.name, prompt_tokens, completion_tokens, seconds)
+        generations = batch_of([completion.text for completion in output.outputs], self.name, prompt_tokens, completion_tokens, seconds)
+        return generations if chat else [dataclasses.replace(g, prefix=prompt.text) for g in generations]
 
     def close(self) -> None:
         self._llm = None  # the engine frees its GPU memory when collected

@@ -1,0 +1,90 @@
+"""What the sandbox's guarantees cost: the referee, and a fresh confined process per evaluation.
+
+For each task's paper policy (examples/paper_<task>.py), on 10 episodes of 1000 steps, side by
+side in alternating rounds on one sandbox worker (medians reported):
+- fast: one evaluation as GFO candidates get it (a fresh confined process runs the simulator
+  and the policy);
+- referee: the same evaluation as final scores get it (the trusted worker runs the simulator,
+  the confined process only maps observations to actions, a pipe round trip per step);
+- unconfined: the simulator and the policy in this process, no sandbox at all (the floor);
+and the referee's share of a tuned program (`gfo.budget` fast evaluations, one referee).
+
+    python benchmarks/referee_cost.py                       # every task, 5 rounds
+    python benchmarks/referee_cost.py --tasks pendulum cheetah --rounds 3
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+from pathlib import Path
+
+from colmo.evaluation import FAST, REFEREE, EvalRequest
+from colmo.executor import LocalExecutor
+from colmo.program import parametrize
+from colmo.sandbox.namespace import load_policy
+from colmo.spec import load_spec
+from colmo.task import episode_seeds, evaluate_policy
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+MENAGERIE = Path(__file__).resolve().parent.parent.parent / "shared" / "menagerie"
+TASKS = ("pendulum", "ball_in_cup", "cheetah", "quadruped", "a1")
+
+
+def measure_task(executor: LocalExecutor, task: str, seeds: tuple[int, ...], rounds: int) -> dict[str, list[float]]:
+    """Seconds per evaluation of the task's paper policy, each way, over alternating rounds."""
+    spec = load_spec(f"{task}.py")
+    program = parametrize((EXAMPLES / f"paper_{task}.py").read_text())
+    env = spec.make_environment()
+    policy = load_policy(program.skeleton, spec.allowed_imports, program.values)  # the paper's code: trusted
+
+    def sandboxed(mode: str) -> float:
+        request = EvalRequest(str(spec.path), (), seeds, program.skeleton, program.values, spec.allowed_imports, mode=mode, timeout_s=600)
+        [evaluation] = executor.evaluate([request])
+        assert evaluation.failure is None, evaluation.failure
+        return evaluation.seconds  # measured by the worker: fork to reply
+
+    def unconfined() -> float:
+        start = time.perf_counter()
+        evaluate_policy(env, policy, seeds)
+        return time.perf_counter() - start
+
+    measures = {"fast": lambda: sandboxed(FAST), "referee": lambda: sandboxed(REFEREE), "unconfined": unconfined}
+    for measure in measures.values():  # warm-up: simulators built, initial states cached
+        measure()
+    times: dict[str, list[float]] = {name: [] for name in measures}
+    for index in range(rounds):
+        for name in list(measures)[:: 1 if index % 2 == 0 else -1]:
+            times[name].append(measures[name]())
+    return times
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--tasks", nargs="+", default=TASKS, choices=TASKS)
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--episodes", type=int, default=10)
+    parser.add_argument("--budget", type=int, default=100, help="fast evaluations per tuned program")
+    args = parser.parse_args()
+    if "MENAGERIE_ROOT" not in os.environ and MENAGERIE.is_dir():
+        os.environ["MENAGERIE_ROOT"] = str(MENAGERIE)
+    seeds = tuple(episode_seeds(0, args.episodes))
+    rows = []
+    with LocalExecutor(1) as executor:
+        for task in args.tasks:
+            times = measure_task(executor, task, seeds, args.rounds)
+            fast, referee, floor = (statistics.median(times[name]) for name in ("fast", "referee", "unconfined"))
+            share = referee / (args.budget * fast + referee)
+            rows.append((task, floor, fast, referee, referee / fast, share))
+            print(f"{task}: unconfined {floor:.3f} s, fast {fast:.3f} s, referee {referee:.3f} s", flush=True)
+    print(f"\n{args.episodes} episodes per evaluation, one worker, medians of {args.rounds} alternating rounds:\n")
+    print("| task | unconfined (s) | fast, sandboxed (s) | referee (s) | referee / fast | referee's share of a tuned program (budget %d) |" % args.budget)
+    print("|---|---|---|---|---|---|")
+    for task, floor, fast, referee, ratio, share in rows:
+        print(f"| {task} | {floor:.3f} | {fast:.3f} | {referee:.3f} | {ratio:.2f}x | {share:.1%} |")
+
+
+if __name__ == "__main__":
+    main()

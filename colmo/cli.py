@@ -1,0 +1,291 @@
+"""The command-line front end: Hydra apps with one-line errors, input checks, and help.
+
+`hydra_app(config_name, check)` wraps `hydra.main` over colmo's bundled configs. Before Hydra
+starts, the command line is read with Hydra's own argument parser and the config of every job
+of a sweep is composed and validated (every value of a choice or range sweep, both ends of a
+sweeper's interval; `check` vets the files it names), so anything a user can get wrong ends in
+one line on stderr (`colmo: error: ...`) and exit code 2 whatever Hydra flag is used
+(`--cfg job task=nope` too), and leaves no output directory. A `ConfigError` or `RunError`
+during the run ends in one line and exit code 2 or 1. `hydra.verbose=true` shows the traceback
+instead. Shell completion (`-sc install=bash`, `-sc query=bash`) goes to Hydra untouched.
+`--help` is colmo's own: every config group with its options, each described by the comment
+heading its YAML file (schema entries hidden, the chosen ones marked), then every documented
+field of the config that the other arguments compose, with its value there and its
+documentation from the schemas in `colmo.config` (`colmo llm=openai --help` shows llm=openai's).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import inspect
+import json
+import os
+import sys
+import tempfile
+import textwrap
+from importlib import resources
+from pathlib import Path
+from typing import Any, Callable, Optional
+
+import hydra
+from hydra.core.config_store import ConfigStore
+from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
+
+from colmo import config
+from colmo.config import CONFIG_MODULE, to_objects
+from colmo.errors import EXIT_RUNTIME, EXIT_USAGE, ConfigError, RunError, one_line
+
+# Schemas by the name the YAML options put in their defaults list.
+SCHEMAS: dict[tuple[Optional[str], str], type] = {
+    ("task", "schema"): config.TaskConfig,
+    ("gfo", "schema"): config.GFOConfig,
+    ("gfo", "bo_schema"): config.BOConfig,
+    ("executor", "schema"): config.ExecutorConfig,
+    ("executor", "ray_schema"): config.RayExecutorConfig,
+    ("database", "schema"): config.DatabaseConfig,
+    ("tracker", "schema"): config.TrackerConfig,
+    ("tracker", "mlflow_schema"): config.MlflowConfig,
+    ("llm", "mutate_schema"): config.MutateConfig,
+    ("llm", "openai_schema"): config.OpenAIConfig,
+    ("llm", "vllm_schema"): config.VLLMConfig,
+    ("llm", "llamacpp_schema"): config.LlamaCppConfig,
+    (None, "optimize_schema"): config.OptimizeConfig,
+    (None, "search_schema"): config.SearchConfig,
+}
+
+
+def register_schemas() -> None:
+    store = ConfigStore.instance()
+    for (group, name), schema in SCHEMAS.items():
+        store.store(group=group, name=name, node=schema)
+
+
+def compose(config_name: str, overrides: list[str], output_dir: Optional[bool] = None) -> Any:
+    """The validated config objects of `config_name` with `overrides` (`ConfigError` if bad).
+    With `output_dir` (True for a sweep, False for a single run), also check that Hydra will be
+    able to create the job's output directory."""
+    from hydra import compose as hydra_compose
+    from hydra import initialize_config_module
+
+    register_schemas()
+    with initialize_config_module(config_module=CONFIG_MODULE, version_base="1.3"):
+        composed = hydra_compose(config_name=config_name, overrides=overrides, return_hydra_config=output_dir is not None)
+        if output_dir is not None:
+            _check_creatable(Path(composed.hydra.sweep.dir if output_dir else composed.hydra.run.dir))
+            with open_dict(composed):
+                del composed["hydra"]
+        return to_objects(composed)
+
+
+def _check_creatable(directory: Path) -> None:
+    """`ConfigError` unless `directory` exists or can be made: a directory is made and removed
+    in its nearest existing ancestor (permission bits do not tell: root ignores them, and
+    /proc or a read-only file system refuses anyway)."""
+    ancestor = directory.absolute()
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if ancestor == directory.absolute() and ancestor.is_dir():
+        return
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".colmo-check-", dir=ancestor))
+    except OSError as error:
+        cause = error.strerror or type(error).__name__
+        reason = f"{ancestor} is not a directory" if not ancestor.is_dir() else f"making a directory in {ancestor} fails: {cause}"
+        raise ConfigError(f"cannot create the output directory {directory}: {reason}") from None
+
+
+def _verbose(overrides: list[str]) -> bool:
+    return any(arg.replace(" ", "").lower() == "hydra.verbose=true" for arg in overrides)
+
+
+def _sweep_values(override: Any) -> list[str]:
+    """The values of a sweep override as override strings: every choice or range value; the
+    two ends of an interval (what a sweeper like Optuna's samples from), as integers when
+    tagged `int` or written as integers."""
+    from hydra.core.override_parser.types import Transformer
+
+    if not override.is_interval_sweep():
+        return list(override.sweep_string_iterator())
+    interval = override.value()
+    integer = "int" in interval.tags or (isinstance(interval.start, int) and isinstance(interval.end, int))
+    ends = (interval.start, interval.end)
+    return [str(int(end)) if integer else Transformer.encode(float(end)) for end in ends]
+
+
+def _sweep_variants(overrides: list[str]) -> list[list[str]]:
+    """The override lists of the first job and of each other value of each sweep, so that
+    every value a sweep takes is composed once."""
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    parsed = OverridesParser.create().parse_overrides(overrides)
+    first = [o.input_line if not o.is_sweep_override() else f"{o.get_key_element()}={_sweep_values(o)[0]}" for o in parsed]
+    variants = [first]
+    for index, override in enumerate(parsed):
+        if override.is_sweep_override():
+            for value in _sweep_values(override)[1:]:
+                variant = list(first)
+                variant[index] = f"{override.get_key_element()}={value}"
+                variants.append(variant)
+    return variants
+
+
+def hydra_app(config_name: str, check: Optional[Callable[[Any], None]] = None) -> Callable[[Callable[[Any], Any]], Callable[[], None]]:
+    """`hydra.main` over colmo's bundled configs, with one-line errors (module docstring).
+
+    `check(cfg)` vets the inputs a config names (files, directories) for every job of a sweep
+    before Hydra starts, raising `ConfigError`, so a bad input leaves no output directory."""
+
+    def decorate(run: Callable[[Any], Any]) -> Callable[[], None]:
+        @functools.wraps(run)
+        def task_function(cfg: DictConfig) -> Any:
+            try:
+                return run(to_objects(cfg))
+            except (ConfigError, RunError) as error:
+                from hydra.core.hydra_config import HydraConfig
+
+                _fail(error, verbose=bool(HydraConfig.get().verbose))  # the job's config has no `hydra` node
+
+        hydra_main = hydra.main(config_path=f"pkg://{CONFIG_MODULE}", config_name=config_name, version_base="1.3")(task_function)
+
+        def main() -> None:
+            from hydra._internal.utils import get_args_parser  # Hydra's own command-line parser
+
+            register_schemas()
+            args = get_args_parser().parse_args(sys.argv[1:])
+            if args.help:
+                try:
+                    print(help_text(config_name, run.__doc__ or "", list(args.overrides)))
+                except Exception as error:  # a bad override: one line, as for a run
+                    _fail(error, verbose=_verbose(args.overrides), code=EXIT_USAGE)
+                return
+            if sum(map(bool, (args.run, args.multirun, args.cfg, args.info, args.shell_completion))) > 1:
+                _fail(ConfigError("only one of --run, --multirun, --cfg, --info and --shell-completion can be given"), verbose=False)
+            if not (args.shell_completion or args.hydra_help):
+                overrides = list(args.overrides)
+                if args.config_dir:
+                    overrides.append(f"hydra.searchpath=[file://{os.path.abspath(args.config_dir)}]")
+                try:
+                    for variant in _sweep_variants(overrides):
+                        cfg = compose(config_name, variant, output_dir=None if args.cfg or args.info else args.multirun)
+                        if check is not None and not (args.cfg or args.info):
+                            check(cfg)
+                except Exception as error:  # every composition error is the user's: one line
+                    _fail(error, verbose=_verbose(overrides), code=EXIT_USAGE)
+            hydra_main()
+
+        return main
+
+    return decorate
+
+
+def _fail(error: BaseException, verbose: bool, code: Optional[int] = None) -> None:
+    if verbose:
+        raise error
+    print(f"colmo: error: {one_line(error)}", file=sys.stderr)
+    sys.exit(code if code is not None else EXIT_RUNTIME if isinstance(error, RunError) else EXIT_USAGE)
+
+
+# -- help -------------------------------------------------------------------------------------
+
+_HELP_WIDTH = 100
+
+
+def _group_options(group: str) -> list[str]:
+    folder = resources.files(CONFIG_MODULE) / group
+    return sorted(entry.name.removesuffix(".yaml") for entry in folder.iterdir() if entry.name.endswith(".yaml"))
+
+
+def _option_summary(group: str, option: str) -> str:
+    """The comment heading an option's YAML file, up to its first line that ends a sentence
+    (pointers to the schema left out): what the option is."""
+    text = (resources.files(CONFIG_MODULE) / group / f"{option}.yaml").read_text()
+    comment: list[str] = []
+    for line in text.splitlines():
+        if not line.startswith("#") or (comment and comment[-1].endswith((".", ":"))):
+            break
+        comment.append(line.lstrip("# ").strip())
+    return " ".join(comment).split(" Fields and defaults")[0]
+
+
+def _wrapped(text: str, indent: int, hanging: int = 0) -> list[str]:
+    return textwrap.wrap(text, _HELP_WIDTH, initial_indent=" " * indent, subsequent_indent=" " * (indent + hanging)) or [""]
+
+
+def _shown(node: DictConfig, name: str) -> str:
+    """A field's value in the composed config, as an override would write it."""
+    if OmegaConf.is_missing(node, name):
+        return "???"
+    value = node[name]
+    if isinstance(value, (DictConfig, ListConfig)):
+        return json.dumps(OmegaConf.to_container(value, resolve=False), separators=(",", ":"))
+    return "null" if value is None else str(value).lower() if isinstance(value, bool) else str(value)
+
+
+def _field_lines(node: DictConfig, prefix: str) -> list[str]:
+    """`prefix.field=value` and its documentation, for each documented field of the dataclass
+    `node` was composed from (the chosen option's own schema)."""
+    schema = OmegaConf.get_type(node)
+    lines = []
+    for item in dataclasses.fields(schema):
+        if "help" in item.metadata:
+            lines += [f"  {prefix}{item.name}={_shown(node, item.name)}", *_wrapped(item.metadata["help"], 6)]
+    return lines
+
+
+def _program_name(config_name: str) -> str:
+    """How the user called the app: its console script, or `python -m colmo...`."""
+    main = sys.modules.get("__main__")
+    module = getattr(getattr(main, "__spec__", None), "name", None)
+    if module:
+        return "python -m " + module.removesuffix(".__main__")
+    return Path(sys.argv[0]).name
+
+
+def _usage(prog: str, example: str) -> list[str]:
+    forms = [
+        (f"{prog} [GROUP=OPTION ...] [KEY=VALUE ...]", f"one run, e.g. {example}"),
+        (f"{prog} -m KEY=A,B [KEY=C,D ...]", "a sweep: one job per combination of values"),
+        (f"{prog} [GROUP=OPTION ...] --help", "this help, for the options chosen"),
+        (f'eval "$({prog} -sc install=bash)"', "shell completion of groups, options and keys"),
+    ]
+    width = max(len(form) for form, _ in forms)
+    return [f"  {form:<{width}}   {what}" for form, what in forms]
+
+
+def help_text(config_name: str, summary: str, overrides: list[str]) -> str:
+    """colmo's `--help`: the app, its config groups with their options (the chosen ones marked),
+    and the documented fields of the config that `overrides` compose, with their values."""
+    from hydra import compose as hydra_compose
+    from hydra import initialize_config_module
+
+    register_schemas()
+    with initialize_config_module(config_module=CONFIG_MODULE, version_base="1.3"):
+        composed = hydra_compose(config_name=config_name, overrides=overrides, return_hydra_config=True)
+    choices = composed.hydra.runtime.choices
+    with open_dict(composed):
+        del composed["hydra"]
+    root = OmegaConf.get_type(composed)
+    prog = _program_name(config_name)
+    groups = [name for name in (item.name for item in dataclasses.fields(root)) if name in choices and (resources.files(CONFIG_MODULE) / name).is_dir()]
+    lines = [
+        f"{prog}: {(root.__doc__ or '').strip().split(': ', 1)[-1]}", *_wrapped(inspect.cleandoc(summary).split("\n\n")[0], 0), "",
+        "Usage:",
+        *_usage(prog, f"{prog} {' '.join(f'{g}={choices[g]}' for g in groups[:2])} seed=1"),
+        "",
+        "Config groups (GROUP=OPTION; * chosen):",
+    ]
+    for group in groups:
+        lines.append(f"  {group}")
+        for option in _group_options(group):
+            mark = "*" if option == choices[group] else " "
+            lines += _wrapped(f"{option:<12} {mark} {_option_summary(group, option)}", 4, 15)
+    lines += ["", "Options (KEY=VALUE, shown with their values in the config chosen above):"]
+    lines += _field_lines(composed, "")
+    for item in dataclasses.fields(root):
+        node = None if OmegaConf.is_missing(composed, item.name) else composed[item.name]
+        if isinstance(node, DictConfig) and dataclasses.is_dataclass(OmegaConf.get_type(node)):
+            chosen = f"{item.name}={choices[item.name]}" if item.name in choices else item.name
+            lines += ["", f" {chosen}:", *_field_lines(node, f"{item.name}.")]
+    lines += ["", "More: --cfg job (the composed config), --hydra-help (Hydra's own flags), hydra.verbose=true (tracebacks)."]
+    return "\n".join(lines)

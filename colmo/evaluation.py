@@ -1,0 +1,236 @@
+"""Evaluations as plain data: what crosses from the search to a sandbox and back, and the
+`Executor` protocol that carries it.
+
+- `EvalRequest`: one candidate evaluation (spec path, environment options, episode seeds,
+  skeleton code, parameters, allowed imports, and how to run it). Only plain data, so any
+  executor (local processes, a Ray cluster) can carry it.
+- `Evaluation`: its outcome: per-episode returns or the failure reason, the control steps
+  simulated, and whether racing cut it short.
+- `Executor`: anything that evaluates batches of requests, results in request order.
+- `batch_evaluator`: the `evaluate_batch(params_list)` callable that tunes one program.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Callable, Optional, Protocol, Sequence
+
+import numpy as np
+
+from colmo.errors import failure_reason
+
+if TYPE_CHECKING:
+    from colmo.spec import Spec
+
+# Where a policy's score is measured: `fast`, in one sandboxed process that runs the simulator
+# and the policy together (what GFO candidates use); `referee`, in a trusted process that owns
+# the simulator and the reward while the policy runs in a separate confined process that only
+# sees observations and returns actions (what final scores use: a program cannot forge it).
+FAST, REFEREE = "fast", "referee"
+PROVISIONAL_TIMEOUT_S = 600.0  # before a task's time limits are known
+
+
+# One-sided 90 % quantiles of Student's t with 1, 2, ..., 30 degrees of freedom; past 30 the
+# last one, which errs (by under 3 %) on the side of running a candidate on.
+_T90 = (
+    3.078, 1.886, 1.638, 1.533, 1.476, 1.440, 1.415, 1.397, 1.383, 1.372, 1.363, 1.356, 1.350, 1.345, 1.341,
+    1.337, 1.333, 1.330, 1.328, 1.325, 1.323, 1.321, 1.319, 1.318, 1.316, 1.315, 1.314, 1.313, 1.311, 1.310,
+)
+# Racing waits while the incumbent's returns spread over more than this fraction of its largest
+# absolute return (episodes it fails next to episodes it does well: `Race`).
+_UNEVEN = 0.8
+
+
+@dataclass(frozen=True)
+class Race:
+    """Racing (`gfo.racing`): a candidate's episodes run in order, and it gives up once it very
+    likely cannot beat the incumbent by more than a negligible margin over all the episodes.
+    `incumbent` holds the incumbent's returns on the same seeds, in the same order.
+
+    The rule is a paired test. Common random numbers (every candidate gets the same seeds, so
+    the same initial states) pair each episode of the candidate with the incumbent's, and the
+    differences `d_i = candidate_i - incumbent_i` vary far less than the returns themselves.
+    After `k` of the `n` episodes, with `mean` and `sd` those of `d_1 .. d_k`, the candidate
+    gives up when
+
+        mean + t(k - 1) * sd / sqrt(k) * sqrt(1 - k / n)  <  margin * mean(|incumbent_1 .. incumbent_k|)
+
+    The left side is a 90 % upper confidence bound (`t`: Student's one-sided 90 % quantile) on
+    the candidate's mean over all `n` episodes minus the incumbent's; the last factor is the
+    finite-population correction: what is estimated is the mean over these `n` seeds, `k` of
+    which are known exactly. The right side is the smallest improvement worth finishing a
+    candidate for: `margin` (a fraction) of the incumbent's typical return, so that the near
+    ties a converged (1+1)-ES keeps proposing stop early too. Racing needs two episodes (a
+    spread) and at least `min_episodes`, and never stops a candidate at its last episode:
+    a candidate that runs them all is a full evaluation.
+
+    The test assumes the first episodes' differences tell about the others'. They do not
+    while the incumbent itself fails some episodes it does well on others (a ball-in-cup
+    policy that misses some catches, a pendulum policy that swings up from some initial
+    states only): a candidate that trails on the first episodes may succeed where the
+    incumbent fails, later. So racing waits while the incumbent's returns spread over more
+    than `_UNEVEN` (80 %) of its largest absolute return.
+    """
+
+    incumbent: tuple[float, ...]
+    min_episodes: int
+    margin: float
+
+    def gives_up(self, returns: Sequence[float]) -> bool:
+        """Whether the candidate, after its first `len(returns)` episodes, stops (the rule above)."""
+        k, n = len(returns), len(self.incumbent)
+        if k < max(self.min_episodes, 2) or k >= n or self.uneven:
+            return False
+        differences = [r - i for r, i in zip(returns, self.incumbent)]
+        mean = sum(differences) / k
+        sd = math.sqrt(sum((d - mean) ** 2 for d in differences) / (k - 1))
+        bound = mean + _T90[min(k - 1, len(_T90)) - 1] * sd / math.sqrt(k) * math.sqrt(1 - k / n)
+        return bound < self.margin * sum(abs(i) for i in self.incumbent[:k]) / k
+
+    @property
+    def uneven(self) -> bool:
+        """Whether the incumbent fails some episodes it does well on others (racing waits)."""
+        return max(self.incumbent) - min(self.incumbent) > _UNEVEN * max(abs(r) for r in self.incumbent)
+
+    def estimate(self, returns: Sequence[float], episodes: Optional[Sequence[int]] = None) -> float:
+        """The candidate's estimated mean over all the incumbent's episodes from the returns of
+        the episodes it ran (`episodes`: their indices; by default the first `len(returns)`):
+        the incumbent's mean plus the mean paired difference. What a method is to be told for
+        a raced-out candidate (`colmo.optimize.methods`): unlike the mean of the episodes run,
+        it does not depend on how easy those episodes happen to be."""
+        episodes = range(len(returns)) if episodes is None else episodes
+        paired = [r - self.incumbent[i] for r, i in zip(returns, episodes, strict=True)]
+        return sum(self.incumbent) / len(self.incumbent) + sum(paired) / len(paired)
+
+
+@dataclass(frozen=True)
+class EvalRequest:
+    """One candidate evaluation, as plain data."""
+
+    spec: str
+    env: tuple[tuple[str, Any], ...]
+    seeds: tuple[int, ...]
+    skeleton: str
+    params: tuple[float, ...]
+    allowed_imports: tuple[str, ...]
+    steps: Optional[int] = None  # episodes cut to this many control steps (a probe); None: whole
+    mode: str = FAST
+    timeout_s: float = 600.0  # wall-clock limit for the whole request
+    memory_mb: int = 4096  # address-space limit of the process running the policy
+    race: Optional[Race] = None
+    trace: bool = False  # referee mode: also record the episode (`colmo.trace.EpisodeTrace`)
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """The outcome of running one policy on a list of episode seeds."""
+
+    returns: tuple[float, ...] = ()
+    failure: Optional[str] = None
+    steps: int = 0  # control steps simulated
+    raced_out: bool = False  # racing stopped it early: `returns` covers the first episodes only
+    seconds: float = 0.0  # wall time of the evaluation, measured by the (trusted) sandbox worker
+    trace: Optional[dict] = None  # the recorded episode, as `EpisodeTrace.to_dict()`, when asked for
+
+    @property
+    def score(self) -> float:
+        """Mean return (over the episodes run); -inf for a failed evaluation, so it loses
+        every comparison."""
+        return -math.inf if self.failure or not self.returns else float(np.mean(self.returns))
+
+    def to_bytes(self) -> bytes:
+        """The evaluation as JSON (what a sandbox process sends back)."""
+        failure = failure_reason(self.failure) if self.failure else None
+        returns = [float(r) for r in self.returns]
+        fields = {"returns": returns, "failure": failure, "steps": int(self.steps), "raced_out": bool(self.raced_out), "seconds": float(self.seconds)}
+        if self.trace is not None:
+            fields["trace"] = self.trace
+        return json.dumps(fields).encode()
+
+    @classmethod
+    def from_bytes(cls, data: bytes) -> "Evaluation":
+        """An evaluation sent by a sandbox process, checked field by field: it is data only.
+        `ValueError` if it is not a well-formed evaluation."""
+        reply = json.loads(data)
+        if not isinstance(reply, dict):
+            raise ValueError("malformed reply")
+        returns, failure, steps = reply.get("returns"), reply.get("failure"), reply.get("steps")
+        raced_out, seconds, trace = reply.get("raced_out"), reply.get("seconds"), reply.get("trace")
+        if (
+            not isinstance(returns, list) or not all(type(r) is float and math.isfinite(r) for r in returns)
+            or not isinstance(failure, (str, type(None))) or type(steps) is not int or steps < 0
+            or type(raced_out) is not bool or type(seconds) is not float or not math.isfinite(seconds)
+            or not isinstance(trace, (dict, type(None)))
+        ):
+            raise ValueError("malformed reply")
+        return cls(tuple(returns), failure_reason(failure) if failure else None, steps, raced_out, seconds, trace)
+
+
+class ExecutorClosed(RuntimeError):
+    """The executor was closed (the search is stopping); no more evaluations."""
+
+
+# The failure of a request that a closing executor cancelled before it ran.
+CANCELLED = "cancelled: the executor was closed"
+
+
+class WorkerLost(Exception):
+    """An executor's worker died or cannot be reached (its process killed, its node gone);
+    the message says how. Executors retry the request on a fresh worker."""
+
+
+EvaluateBatch = Callable[[Sequence[Sequence[float]]], list[Evaluation]]
+
+
+class Executor(Protocol):
+    """Anything that evaluates batches of requests, results in request order (local sandboxed
+    processes, a Ray cluster). Thread-safe: several programs' optimizers share one executor."""
+
+    n_workers: int
+    closed: bool
+    evaluations_done: int
+    steps_done: int
+
+    def evaluate(self, requests: Sequence[EvalRequest]) -> list[Evaluation]: ...
+
+    def worker_pids(self) -> list[int]: ...
+
+    @property
+    def busy_seconds(self) -> float: ...
+
+    def close(self, cancel: bool = False) -> None: ...
+
+
+@dataclass(frozen=True)
+class Evaluator:
+    """Everything about a task's evaluation except the program: which spec, environment
+    options, episode seeds, limits. `request(skeleton, params)` makes the plain-data request."""
+
+    spec: str
+    env: tuple[tuple[str, Any], ...]
+    seeds: tuple[int, ...]
+    allowed_imports: tuple[str, ...]
+    timeout_s: float  # per fast-path request
+    referee_timeout_s: float  # per referee request (slower: a round trip per control step)
+    memory_mb: int
+
+    @classmethod
+    def for_task(cls, spec: "Spec", env: dict[str, Any], seeds: Sequence[int], memory_mb: int, timeout_s: float = PROVISIONAL_TIMEOUT_S) -> "Evaluator":
+        """An evaluator for a task, with the same time limit for both modes until calibrated
+        (`colmo.optimize.tune.calibrated`)."""
+        return cls(str(spec.path), tuple(sorted(env.items())), tuple(seeds), spec.allowed_imports, timeout_s, timeout_s, memory_mb)
+
+    def request(self, skeleton: str, params: Sequence[float], **options: Any) -> EvalRequest:
+        fields = dict(seeds=self.seeds, timeout_s=self.timeout_s, memory_mb=self.memory_mb) | options
+        return EvalRequest(self.spec, self.env, skeleton=skeleton, params=tuple(float(p) for p in params), allowed_imports=self.allowed_imports, **fields)
+
+
+def batch_evaluator(executor: Executor, evaluator: Evaluator, skeleton: str, **options: Any) -> EvaluateBatch:
+    """The `evaluate_batch(params_list)` callable that GFO methods use for one program."""
+
+    def evaluate_batch(params_list: Sequence[Sequence[float]]) -> list[Evaluation]:
+        return executor.evaluate([evaluator.request(skeleton, params, **options) for params in params_list])
+
+    return evaluate_batch

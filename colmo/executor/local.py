@@ -1,0 +1,54 @@
+"""`executor=local`: sandboxed worker processes on this machine, one per core by default."""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from typing import Optional
+
+from colmo.evaluation import EvalRequest, Evaluation
+from colmo.executor.dispatch import Dispatcher
+from colmo.sandbox.process import SandboxProcess
+
+
+class LocalExecutor(Dispatcher):
+    """`workers` sandbox worker processes (`colmo.sandbox.worker`), each started lazily by the
+    thread that uses it (the worker's parent-death signal follows that thread, which lives as
+    long as the executor) and restarted after a loss."""
+
+    def __init__(self, workers: int, memory_mb: int = 4096, max_retries: int = 2):
+        super().__init__(workers, max_retries)
+        self.memory_mb = memory_mb
+        self.tmpdir = tempfile.mkdtemp(prefix="colmo-sandbox-")
+        self._processes: list[Optional[SandboxProcess]] = [None] * workers
+        self._start_dispatching()
+
+    def worker_pids(self) -> list[int]:
+        """Process ids of the running worker processes."""
+        return [process.pid for process in self._processes if process is not None and process.alive()]
+
+    def _open(self, slot: int) -> None:
+        self._discard(slot)  # a worker that died by itself
+        self._processes[slot] = SandboxProcess(self.tmpdir, self.memory_mb)
+
+    def _run(self, slot: int, request: EvalRequest) -> Evaluation:
+        return self._processes[slot].evaluate(request)
+
+    def _discard(self, slot: int) -> None:
+        process, self._processes[slot] = self._processes[slot], None
+        if process is not None:
+            process.kill()
+
+    def _is_open(self, slot: int) -> bool:
+        process = self._processes[slot]
+        return process is not None and process.alive()
+
+    def close(self, cancel: bool = False) -> None:
+        super().close(cancel)
+        shutil.rmtree(self.tmpdir, ignore_errors=True)
+
+    def __enter__(self) -> "LocalExecutor":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,83 @@
+"""Intake: from a generator's raw output to a checked parametric program, or why there is none.
+
+The output is untrusted text, read in the coordinator, so it is bounded before anything parses
+it: at most `MAX_ANSWER_CHARS` characters and `MAX_NESTING` levels of brackets (a linear scan),
+so a hostile answer costs milliseconds, not minutes and gigabytes. Then the policy is extracted
+(`colmo.extract`), parametrized (`colmo.program`), bounded to `MAX_PROGRAM_NODES` AST nodes, and
+statically checked (`colmo.sandbox.check`).
+
+`read_program` raises `Unusable` when no program can be read (the sample is `unusable`) and
+`ForbiddenProgram` when the program is refused (the sample `failed`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional, Sequence
+
+from colmo.astutil import node_count
+from colmo.errors import ConfigError
+from colmo.extract import ExtractionError, extract_policy
+from colmo.program import ParametricProgram, ProgramError, instantiate, measure, parametrize
+from colmo.sandbox.check import ForbiddenProgram, check_tree, parse_program
+
+MAX_ANSWER_CHARS = 100_000  # a 1024-token answer is about 4,000 characters
+MAX_NESTING = 100  # brackets; Python's own parser stops at 200
+MAX_PROGRAM_NODES = 20_000  # the paper's policies have a few hundred
+
+
+class Unusable(ValueError):
+    """No usable program in the output; the message is the reason."""
+
+
+def nesting(text: str) -> int:
+    """The deepest bracket nesting in `text`, strings included (a bound, not a parse)."""
+    depth = deepest = 0
+    for char in text:
+        if char in "([{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif char in ")]}":
+            depth = max(depth - 1, 0)
+    return deepest
+
+
+def read_program(text: str, allowed_imports: Sequence[str], prefix: str = "", max_nodes: Optional[int] = None) -> ParametricProgram:
+    """The checked parametric program in a generator's output (module docstring); for a
+    completion, `prefix` is the prompt text it continues (colmo's own, so not bounded). A
+    program bigger than `max_nodes` AST nodes (`database.max_nodes`: readability) is refused."""
+    if len(text) > MAX_ANSWER_CHARS:
+        raise Unusable(f"the output has {len(text)} characters, more than the {MAX_ANSWER_CHARS} allowed")
+    if nesting(text) > MAX_NESTING:
+        raise Unusable(f"the output nests brackets more than {MAX_NESTING} deep")
+    try:
+        program = parametrize(extract_policy(text, prefix=prefix))
+    except (ExtractionError, ProgramError) as error:
+        raise Unusable(str(error)) from None
+    tree = parse_program(program.skeleton)
+    if node_count(tree) > MAX_PROGRAM_NODES:
+        raise Unusable(f"the program has more than {MAX_PROGRAM_NODES} AST nodes")
+    check_tree(tree, allowed_imports)
+    if max_nodes is not None:
+        nodes = measure(instantiate(program.skeleton, program.values)).nodes
+        if nodes > max_nodes:
+            raise ForbiddenProgram(f"too large: {nodes} AST nodes (database.max_nodes={max_nodes})")
+    return program
+
+
+def read_policy_file(path: str, allowed_imports: Sequence[str]) -> ParametricProgram:
+    """The checked program in a policy file given on a command line (a `.py` file or a raw
+    language-model answer); `ConfigError` naming the file if there is none."""
+    file = Path(path).expanduser()
+    if file.is_dir():
+        raise ConfigError(f"policy_file is a directory, not a file: {path}")
+    if not file.is_file():
+        raise ConfigError(f"policy_file not found: {path}")
+    try:
+        text = file.read_text(errors="replace")
+    except OSError as error:
+        raise ConfigError(f"cannot read policy_file {path}: {error.strerror}") from None
+    try:
+        return read_program(text, allowed_imports)
+    except (Unusable, ForbiddenProgram) as error:
+        raise ConfigError(f"no usable policy in {path}: {error}") from None

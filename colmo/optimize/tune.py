@@ -1,0 +1,232 @@
+"""Tuning one program's constants (the paper's inner loop) and measuring its final score.
+
+`tune` runs a registered method (`colmo.optimize.methods`) in normalized coordinates `z`,
+with `params = x0 + step * z`: `z = 0` is the program's own constants (always the first
+evaluation), and each constant's step is proportional to its magnitude, so a gain of 12 and a
+threshold of 0.05 move on their own scales. Candidates go `gfo.workers` at a time through a
+`CandidateEvaluator`, which is where the sandboxed workers are; with racing, each candidate's
+episodes stop once it very likely cannot beat the best candidate so far
+(`colmo.evaluation.Race`), and the method is told its mean over the episodes it ran. A raced-out
+candidate never becomes the best, and every reported score is over all episodes.
+
+`optimize_program` is the whole evaluation of one program: score it as written, tune it,
+round the tuned constants to the 4 significant digits it will be read with, score that
+readable code, and have the referee measure it (`colmo.sandbox.referee`); a fast-path score
+the referee does not reproduce marks the program failed (`tampering: ...`). So the score
+reported is the score of the code shown, measured where the program cannot write. A tuning
+cut short by `stop()` (a deadline) keeps its best constants unrounded, saving the check.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Callable, Optional, Sequence
+
+import numpy as np
+
+from colmo.errors import ConfigError
+from colmo.evaluation import FAST, REFEREE, Evaluation, Evaluator, Executor, Race
+from colmo.optimize.methods import METHODS
+from colmo.program import ParametricProgram, ProgramSize, instantiate, measure
+
+if TYPE_CHECKING:
+    from colmo.config import GFOConfig
+
+DISPLAY_DIGITS = 4
+TIMEOUT_FLOOR_S = 10.0
+TIMEOUT_FACTOR = 30.0
+# Relative difference between a fast-path and a referee score beyond which the fast path was
+# tampered with; the two run the same code on the same data, so honest programs agree exactly.
+_TAMPERING_TOLERANCE = 1e-9
+
+
+class CandidateEvaluator:
+    """Evaluations of one program's parameter vectors on a task: fast (GFO candidates, raced
+    and split over `episode_chunks` requests when asked) or by the referee (final scores)."""
+
+    def __init__(self, executor: Executor, evaluator: Evaluator, skeleton: str, episode_chunks: int = 1):
+        self.executor = executor
+        self.evaluator = evaluator
+        self.skeleton = skeleton
+        self.chunks = [list(chunk) for chunk in np.array_split(np.arange(len(evaluator.seeds)), max(1, min(episode_chunks, len(evaluator.seeds))))]
+
+    def fast(self, params_list: Sequence[Sequence[float]], race: Optional[Race] = None) -> list[Evaluation]:
+        """Each vector's fast-path evaluation. With `race` (its `incumbent` over all seeds) the
+        episodes of a candidate run in order in one request, so that racing sees them all and
+        the result does not depend on how many workers there are; without, they are split."""
+        seeds = self.evaluator.seeds
+        chunks = [list(range(len(seeds)))] if race else self.chunks
+        requests = [
+            self.evaluator.request(self.skeleton, params, seeds=tuple(seeds[i] for i in chunk), mode=FAST, race=race)
+            for params in params_list
+            for chunk in chunks
+        ]
+        parts = self.executor.evaluate(requests)
+        return [_joined(parts[k : k + len(chunks)]) for k in range(0, len(parts), len(chunks))]
+
+    def referee(self, params: Sequence[float], timeout_s: Optional[float] = None) -> Evaluation:
+        """The referee's evaluation of one vector over all the seeds (split over
+        `episode_chunks` requests), each request limited to `timeout_s` if given."""
+        seeds = self.evaluator.seeds
+        limit = self.evaluator.referee_timeout_s if timeout_s is None else timeout_s
+        requests = [
+            self.evaluator.request(self.skeleton, params, seeds=tuple(seeds[i] for i in chunk), mode=REFEREE, timeout_s=limit)
+            for chunk in self.chunks
+        ]
+        return _joined(self.executor.evaluate(requests))
+
+
+def _joined(parts: list[Evaluation]) -> Evaluation:
+    """One evaluation from the evaluations of consecutive parts of the seeds."""
+    if len(parts) == 1:
+        return parts[0]
+    returns = tuple(r for part in parts for r in part.returns)
+    failure = next((part.failure for part in parts if part.failure), None)
+    return Evaluation(returns, failure, sum(part.steps for part in parts), any(part.raced_out for part in parts))
+
+
+@dataclass(frozen=True)
+class Tuning:
+    """The outcome of tuning one parameter vector."""
+
+    params: tuple[float, ...]
+    evaluation: Evaluation  # the best candidate's, over all episodes
+    initial: Evaluation
+    evaluations: int
+    steps: int  # control steps simulated
+    raced_out: int  # candidates whose episodes racing cut short
+    cut_short: bool  # stopped before its budget (the search's deadline)
+
+
+def step_sizes(x0: Sequence[float], cfg: "GFOConfig") -> np.ndarray:
+    """Initial step per constant: a fraction of its magnitude, floored for constants near 0."""
+    return cfg.relative_step * np.maximum(np.abs(np.asarray(x0, dtype=float)), cfg.min_step)
+
+
+def tune(evaluate: CandidateEvaluator, x0: Sequence[float], cfg: "GFOConfig", seed: int, stop: Callable[[], bool] = lambda: False) -> Tuning:
+    """Maximize the score over the parameters, starting from (and first evaluating) `x0`,
+    until the budget is spent or `stop()` says so. The objective is deterministic (fixed
+    episode seeds), so the best candidate seen is the answer. A program that fails with its
+    own constants is not tuned."""
+    x0 = np.asarray(x0, dtype=float)
+    initial = evaluate.fast([x0])[0]
+    best_params, best = x0, initial
+    evaluations, steps, raced_out, cut_short = 1, initial.steps, 0, False
+    if cfg.method != "none" and len(x0) and not initial.failure:
+        method = METHODS[cfg.method].make(len(x0), cfg, seed)
+        method.tell(method.ask()[0], None if initial.failure else initial.score)  # the first ask is z = 0, i.e. x0
+        scale = step_sizes(x0, cfg)
+        while evaluations < cfg.budget:
+            if stop():
+                cut_short = True
+                break
+            asked = [method.ask() for _ in range(min(cfg.workers, cfg.budget - evaluations))]
+            candidates = [x0 + scale * z for _, z in asked]
+            race = Race(best.returns, cfg.racing_min_episodes, cfg.racing_margin) if cfg.racing_on else None
+            for (token, _), params, evaluation in zip(asked, candidates, evaluate.fast(candidates, race)):
+                method.tell(token, _told(evaluation, race))
+                evaluations, steps, raced_out = evaluations + 1, steps + evaluation.steps, raced_out + evaluation.raced_out
+                if not evaluation.raced_out and evaluation.score > best.score:
+                    best_params, best = params, evaluation
+    return Tuning(tuple(float(p) for p in best_params), best, initial, evaluations, steps, raced_out, cut_short)
+
+
+def _told(evaluation: Evaluation, race: Optional[Race]) -> Optional[float]:
+    """What the method is told: None for a failure; for a raced-out candidate the estimate of
+    its mean over all episodes (`Race.estimate`), not the mean of the episodes it ran."""
+    if evaluation.failure:
+        return None
+    return race.estimate(evaluation.returns) if evaluation.raced_out and race else evaluation.score
+
+
+def round_significant(values: Sequence[float], digits: int = DISPLAY_DIGITS) -> tuple[float, ...]:
+    return tuple(float(f"{v:.{digits}g}") for v in values)
+
+
+@dataclass(frozen=True)
+class ProgramResult:
+    """One program's complete evaluation: what the search stores and `colmo.optimize` prints."""
+
+    params: tuple[float, ...]
+    code: str  # readable, the final constants inlined
+    evaluation: Evaluation  # the referee's, over all episodes
+    initial: Evaluation  # with the program's own constants (fast path)
+    evaluations: int
+    steps: int
+    raced_out: int
+    cut_short: bool
+    seconds: float
+    size: ProgramSize
+
+    @property
+    def score(self) -> float:
+        return self.evaluation.score
+
+    @property
+    def failure(self) -> str | None:
+        return self.evaluation.failure
+
+
+def optimize_program(
+    program: ParametricProgram, evaluate: CandidateEvaluator, cfg: "GFOConfig", seed: int, stop: Callable[[], bool] = lambda: False
+) -> ProgramResult:
+    """Tune `program`, and have the referee score the readable (4-digit) code that results."""
+    start = time.perf_counter()
+    if cfg.method == "none" or not program.values:  # nothing to tune: the referee's score is the only one
+        final = evaluate.referee(program.values)
+        code = instantiate(program.skeleton, program.values)
+        return ProgramResult(tuple(program.values), code, final, final, 1, final.steps, 0, False, time.perf_counter() - start, measure(code))
+    tuning = tune(evaluate, program.values, cfg, seed, stop)
+    params, fast, evaluations, steps = tuple(program.values), tuning.initial, tuning.evaluations, tuning.steps
+    digits = None
+    if tuning.params != params and tuning.cut_short:  # no time to check the rounded code: keep every digit
+        params, fast = tuning.params, tuning.evaluation
+    elif tuning.params != params:
+        rounded = round_significant(tuning.params)
+        evaluation = evaluate.fast([rounded])[0]
+        evaluations, steps = evaluations + 1, steps + evaluation.steps
+        if evaluation.score >= tuning.initial.score:  # else rounding cost more than tuning gained
+            params, fast, digits = rounded, evaluation, DISPLAY_DIGITS
+    final = fast
+    if not fast.failure:
+        final = _refereed(evaluate.referee(params), fast)
+        evaluations, steps = evaluations + 1, steps + final.steps
+    code = instantiate(program.skeleton, params, digits=digits)
+    return ProgramResult(
+        params, code, final, tuning.initial, evaluations, steps, tuning.raced_out, tuning.cut_short, time.perf_counter() - start, measure(code)
+    )
+
+
+def _refereed(referee: Evaluation, fast: Evaluation) -> Evaluation:
+    """The referee's evaluation, failed as tampering if the fast path reported other returns."""
+    if referee.failure or len(referee.returns) != len(fast.returns):
+        return referee
+    if not np.allclose(referee.returns, fast.returns, rtol=_TAMPERING_TOLERANCE, atol=_TAMPERING_TOLERANCE):
+        reason = f"tampering: the program reported a score of {fast.score:.6g}; the referee measured {referee.score:.6g}"
+        return Evaluation(referee.returns, reason, referee.steps)
+    return referee
+
+
+def calibrated(executor: Executor, evaluator: Evaluator, starter: ParametricProgram, timeout_s: Optional[float] = None) -> Evaluator:
+    """`evaluator` with time limits that fit its task: `timeout_s` if given, else
+    `TIMEOUT_FACTOR` times what the starter program's evaluation took in each mode, at least
+    `TIMEOUT_FLOOR_S`; so a program that hangs costs seconds, not minutes. The starter must run:
+    `ConfigError` if it fails (the spec is the user's)."""
+    evaluate = CandidateEvaluator(executor, evaluator, starter.skeleton)
+    fast, referee = evaluate.fast([starter.values])[0], evaluate.referee(starter.values)
+    failure = fast.failure or referee.failure
+    if failure:
+        raise ConfigError(f"the starter policy in {evaluator.spec} fails: {failure}")
+    if timeout_s is not None:
+        return replace(evaluator, timeout_s=timeout_s, referee_timeout_s=timeout_s)
+    return replace(
+        evaluator, timeout_s=max(TIMEOUT_FLOOR_S, TIMEOUT_FACTOR * fast.seconds),
+        referee_timeout_s=max(TIMEOUT_FLOOR_S, TIMEOUT_FACTOR * referee.seconds),
+    )
+
+
+def finite_or_none(value: float) -> float | None:
+    """JSON has no infinity: a failed score is reported as null."""
+    return value if math.isfinite(value) else None

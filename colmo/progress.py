@@ -1,0 +1,183 @@
+"""Progress a person can read while a search runs.
+
+On a terminal: a live display on stderr, redrawn twice a second from the search's counters, so
+it moves with every evaluation, not every batch: samples, evaluations and evaluations/s,
+control steps, the best training score, generator and evaluator busy, and the time left
+against the limit that binds (samples, seconds, or a target score). Log lines print above it
+(rich's logging handler on the display's console), never into it. Without a terminal: the
+same numbers as one plain log line every `search.progress_every_s` seconds.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import threading
+import time
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Iterator, Optional
+
+from rich.console import Console
+from rich.live import Live
+from rich.logging import RichHandler
+from rich.progress_bar import ProgressBar
+from rich.table import Table
+
+if TYPE_CHECKING:
+    from colmo.config import SearchConfig
+    from colmo.search import Search
+
+log = logging.getLogger("colmo.search")
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The numbers a progress display shows, read from a running search."""
+
+    samples: int
+    max_samples: int
+    in_flight: int
+    evaluations: int
+    steps: int
+    elapsed: float
+    best: Optional[float]
+    generator_busy: float
+    evaluator_busy: float
+    max_seconds: float
+    stop_at_score: Optional[float]
+
+    @property
+    def evaluations_per_second(self) -> float:
+        return self.evaluations / self.elapsed if self.elapsed else 0.0
+
+    def time_left(self) -> tuple[Optional[float], str]:
+        """Seconds left against the limit that binds first, and its name: `stop_at_score` (0 s:
+        the target is reached, the search is finishing), else whichever of `max_seconds` and
+        `max_samples` (at the rate samples have settled so far) ends the run sooner. None when
+        nothing tells yet (no sample settled and no time limit)."""
+        if self.stop_at_score is not None and self.best is not None and self.best >= self.stop_at_score:
+            return 0.0, "stop_at_score"
+        rate = self.samples / self.elapsed if self.elapsed and self.samples else 0.0
+        by_samples = max(self.max_samples - self.samples, 0) / rate if rate else None
+        by_seconds = max(self.max_seconds - self.elapsed, 0.0) if self.max_seconds else None
+        if by_seconds is not None and (by_samples is None or by_seconds <= by_samples):
+            return by_seconds, "max_seconds"
+        return by_samples, "max_samples"
+
+    def fraction_done(self) -> float:
+        """How far the run is towards the limit that binds, in [0, 1]."""
+        _, limit = self.time_left()
+        if limit == "stop_at_score":
+            return 1.0
+        if limit == "max_seconds":
+            return min(self.elapsed / self.max_seconds, 1.0)
+        return min(self.samples / self.max_samples, 1.0)
+
+    def _best(self) -> str:
+        best = "—" if self.best is None or not math.isfinite(self.best) else f"{self.best:.1f}"
+        return best + (f" (target {self.stop_at_score:g})" if self.stop_at_score is not None else "")
+
+    def _left(self) -> str:
+        left, limit = self.time_left()
+        return f"{_duration(left)} left ({limit})"
+
+    def _counts(self) -> str:
+        return (
+            f"samples {self.samples}/{self.max_samples} (+{self.in_flight} in flight) | "
+            f"evals {self.evaluations:,} ({self.evaluations_per_second:.1f}/s) | steps {self.steps:,}"
+        )
+
+    def _scores(self) -> str:
+        return f"best {self._best()} | generator busy {self.generator_busy:.0%} | evaluators busy {self.evaluator_busy:.0%}"
+
+    def line(self) -> str:
+        """All the numbers on one line (the plain progress line)."""
+        return f"{self._counts()} | {self._scores()} | {self._left()}"
+
+    def lines(self) -> tuple[str, str, str]:
+        """The numbers in three short lines (the live display, under 100 columns)."""
+        return f"{self.fraction_done():4.0%} | {self._left()}", self._counts(), self._scores()
+
+
+def _duration(seconds: Optional[float]) -> str:
+    if seconds is None:
+        return "?"
+    minutes, secs = divmod(int(seconds), 60)
+    return f"{minutes // 60}h{minutes % 60:02d}m" if minutes >= 60 else f"{minutes}m{secs:02d}s"
+
+
+def snapshot(search: "Search") -> Snapshot:
+    """What `search` has done so far."""
+    elapsed = time.perf_counter() - search.start
+    executor = search.executor
+    busy = executor.busy_seconds / (elapsed * executor.n_workers) if elapsed else 0.0
+    limits = search.cfg.search
+    return Snapshot(
+        samples=search.counters.samples, max_samples=limits.max_samples, in_flight=search.in_flight_samples,
+        evaluations=executor.evaluations_done, steps=executor.steps_done, elapsed=elapsed,
+        best=search.database.best.score if search.database else None,
+        generator_busy=search.generation_seconds / elapsed if elapsed else 0.0, evaluator_busy=busy,
+        max_seconds=limits.max_seconds, stop_at_score=limits.stop_at_score,
+    )
+
+
+def render(state: Snapshot, width: int = 100) -> Table:
+    """The live display: a bar of the binding limit with the time left beside it, and the
+    numbers in two lines under it (each under 100 columns; cut with an ellipsis on a narrower terminal)."""
+    head, counts, scores = state.lines()
+    top = Table.grid(padding=(0, 1))
+    top.add_row(ProgressBar(total=1.0, completed=state.fraction_done(), width=max(10, min(60, width - len(head) - 1))), head)
+    table = Table.grid()
+    table.add_column(no_wrap=True, overflow="ellipsis")
+    for row in (top, counts, scores):
+        table.add_row(row)
+    return table
+
+
+@contextlib.contextmanager
+def live_display(search: "Search", console: Console) -> Iterator[None]:
+    """The terminal display (module docstring) while the block runs."""
+    live = Live(get_renderable=lambda: render(snapshot(search), console.width), console=console, refresh_per_second=2, transient=True)
+    root = logging.getLogger()
+    # Hydra's console handler writes to the real stderr: the display's console takes over.
+    replaced = [h for h in root.handlers if type(h) is logging.StreamHandler]
+    handler = RichHandler(console=console, show_path=False)
+    for old in replaced:
+        root.removeHandler(old)
+    root.addHandler(handler)
+    live.start()
+    try:
+        yield
+    finally:
+        live.stop()
+        root.removeHandler(handler)
+        for old in replaced:
+            root.addHandler(old)
+
+
+@contextlib.contextmanager
+def plain_lines(search: "Search", every_s: float) -> Iterator[None]:
+    """A progress line in the log every `every_s` seconds while the block runs."""
+    done = threading.Event()
+
+    def report() -> None:
+        while not done.wait(every_s):
+            log.info("progress: %s", snapshot(search).line())
+
+    thread = threading.Thread(target=report, daemon=True, name="colmo-progress")
+    thread.start()
+    try:
+        yield
+    finally:
+        done.set()
+
+
+def progress(cfg: "SearchConfig", search: "Search", console: Optional[Console] = None) -> contextlib.AbstractContextManager:
+    """The live display on a terminal, plain lines otherwise, nothing when `search.progress` is off."""
+    console = console or Console(stderr=True)
+    if not cfg.search.progress:
+        return contextlib.nullcontext()
+    if console.is_terminal:
+        return live_display(search, console)
+    return plain_lines(search, cfg.search.progress_every_s)

@@ -1,0 +1,220 @@
+"""What a search records: one immutable `SampleRecord` per generated sample, built once its
+outcome is known, and the typed progress reports made from them (`BatchReport` after every
+batch, `Summary` at the end).
+
+A sample's status is one of:
+- `evaluated`: the program ran; `score` is the referee's mean return over the training episodes;
+- `failed`: the program was refused by the static check or failed when it ran (`failure` says how);
+- `duplicate`: its structure was evaluated before (programs differing only in constants);
+- `unusable`: no program could be read from the generator's output (`failure` says why);
+- `interrupted`: the search stopped before the sample was evaluated; resume evaluates it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING, Any, Optional
+
+if TYPE_CHECKING:
+    from colmo.generate.base import Generation
+    from colmo.optimize.tune import ProgramResult
+    from colmo.program import ParametricProgram
+
+EVALUATED, FAILED, DUPLICATE, UNUSABLE, INTERRUPTED = "evaluated", "failed", "duplicate", "unusable", "interrupted"
+STATUSES = (EVALUATED, FAILED, DUPLICATE, UNUSABLE, INTERRUPTED)
+FINISHED = ("max_samples", "max_seconds", "stop_at_score")  # the stop reasons of a run that reached its limits
+
+
+@dataclass(frozen=True)
+class Sample:
+    """A generated sample before its outcome is known: where it comes from."""
+
+    index: int
+    batch: int
+    island: int
+    parent_keys: tuple[str, ...]
+    generation: "Generation"
+
+
+def _finite(value: float) -> Optional[float]:
+    return value if math.isfinite(value) else None
+
+
+@dataclass(frozen=True)
+class SampleRecord:
+    sample: int
+    batch: int
+    status: str
+    island: int
+    parent_keys: tuple[str, ...]
+    generator: str
+    raw: str  # the generator's output as it came (a completion's continuation: prompt_prefix + raw)
+    prompt_prefix: str = ""
+    key: Optional[str] = None
+    skeleton: Optional[str] = None
+    code: Optional[str] = None  # readable code with the final constants inlined
+    initial_params: Optional[tuple[float, ...]] = None
+    params: Optional[tuple[float, ...]] = None
+    initial_score: Optional[float] = None
+    score: Optional[float] = None
+    returns: Optional[tuple[float, ...]] = None  # per training episode, measured by the referee
+    heldout_score: Optional[float] = None
+    evaluations: int = 0
+    steps: int = 0  # control steps simulated for this sample
+    raced_out: int = 0
+    cut_short: bool = False  # the search's deadline or an interruption stopped its tuning
+    lines: Optional[int] = None
+    nodes: Optional[int] = None
+    n_params: Optional[int] = None
+    failure: Optional[str] = None
+    generation_seconds: float = 0.0
+    evaluation_seconds: float = 0.0
+    prompt_tokens: int = 0
+    completion_tokens: int = 0
+    created: float = field(default_factory=time.time)
+
+    @classmethod
+    def of(
+        cls, sample: Sample, status: str, program: Optional["ParametricProgram"] = None,
+        result: Optional["ProgramResult"] = None, failure: Optional[str] = None,
+    ) -> "SampleRecord":
+        """The record of `sample` with its outcome: the program it holds (if one could be read)
+        and its evaluation (if it ran)."""
+        generation = sample.generation
+        fields: dict[str, Any] = dict(
+            sample=sample.index, batch=sample.batch, status=status, island=sample.island, parent_keys=tuple(sample.parent_keys),
+            generator=generation.generator, raw=generation.text, prompt_prefix=generation.prefix,
+            generation_seconds=generation.seconds, prompt_tokens=generation.prompt_tokens,
+            completion_tokens=generation.completion_tokens, failure=failure,
+        )
+        if program is not None:
+            fields.update(key=program.key, skeleton=program.skeleton, initial_params=tuple(program.values), n_params=program.n_params)
+        if result is not None:
+            size = result.size
+            fields.update(
+                status=FAILED if result.failure else EVALUATED, failure=result.failure, code=result.code,
+                params=tuple(result.params), initial_score=_finite(result.initial.score), score=_finite(result.score),
+                returns=tuple(result.evaluation.returns), evaluations=result.evaluations, steps=result.steps,
+                raced_out=result.raced_out, cut_short=result.cut_short, evaluation_seconds=result.seconds,
+                lines=size.lines, nodes=size.nodes,
+            )
+        return cls(**fields)
+
+    def as_row(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Totals:
+    """What a search has done so far, as both reports say it."""
+
+    samples: int
+    programs_evaluated: int
+    duplicates_skipped: int
+    failures: int
+    unusable_outputs: int
+    interrupted: int
+    evaluations: int
+    steps: int  # control steps simulated
+    valid_program_rate: float  # evaluated / (samples - duplicates - interrupted)
+    duplicate_rate: float
+    tokens_per_second: float
+    evaluations_per_second: float
+    generator_busy: float  # fractions of the wall time
+    evaluator_busy: float
+    seconds: float
+
+
+@dataclass(frozen=True)
+class BatchReport(Totals):
+    """The search's state after a batch is integrated (what trackers log, at step = samples)."""
+
+    batch: int
+    best_score: float
+    best_per_island: tuple[float, ...]
+    generation_seconds: float
+    evaluation_seconds: float
+    queue_depth: int
+
+    def metrics(self) -> dict[str, float]:
+        """The numeric fields that are metrics (the batch index and samples are the step)."""
+        values = {name: float(value) for name, value in asdict(self).items() if name not in ("batch", "samples", "best_per_island")}
+        values.update({f"best_score_island_{i}": score for i, score in enumerate(self.best_per_island)})
+        return values
+
+
+@dataclass(frozen=True)
+class Summary(Totals):
+    """A finished (or stopped) search: what `summary.json` holds."""
+
+    task: str
+    best_score: Optional[float]
+    best_heldout_score: Optional[float]
+    best_key: Optional[str]
+    best_code: Optional[str]
+    best_so_far: tuple[tuple[int, float], ...]
+    stop_reason: str  # max_samples, max_seconds, stop_at_score, interrupted, generator failed: ..., store failed: ...
+    run_dir: str
+    heldout: tuple[dict, ...] = ()  # the top programs' training and held-out scores
+    media: dict = field(default_factory=dict)  # the best policy's plot and video, relative to run_dir
+    simplified: dict = field(default_factory=dict)  # the best policy simplified: scores, sizes, code
+
+    @property
+    def resumable(self) -> bool:
+        """Stopped before its limits: `resume=` continues it (and then scores its best programs
+        on held-out episodes)."""
+        return self.stop_reason not in FINISHED
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass
+class Counters:
+    """Running totals over the samples integrated so far."""
+
+    samples: int = 0
+    evaluated: int = 0
+    duplicates: int = 0
+    failures: int = 0
+    unusable: int = 0
+    interrupted: int = 0
+    evaluations: int = 0
+    steps: int = 0
+    completion_tokens: int = 0
+    generation_seconds: float = 0.0
+
+    def count(self, record: SampleRecord) -> None:
+        self.samples += 1
+        field_name = {EVALUATED: "evaluated", FAILED: "failures", DUPLICATE: "duplicates", UNUSABLE: "unusable", INTERRUPTED: "interrupted"}[record.status]
+        setattr(self, field_name, getattr(self, field_name) + 1)
+        self.evaluations += record.evaluations
+        self.steps += record.steps
+        self.completion_tokens += record.completion_tokens
+        self.generation_seconds += record.generation_seconds
+
+    @property
+    def valid_program_rate(self) -> float:
+        """The share of new programs (duplicates and interrupted samples aside) that could be
+        read, passed the static check and ran."""
+        judged = self.samples - self.duplicates - self.interrupted
+        return self.evaluated / judged if judged else 0.0
+
+    @property
+    def duplicate_rate(self) -> float:
+        return self.duplicates / self.samples if self.samples else 0.0
+
+    @property
+    def tokens_per_second(self) -> float:
+        """Completion tokens per second of generation (0 for generators without tokens)."""
+        return self.completion_tokens / self.generation_seconds if self.generation_seconds else 0.0
+
+    def totals(self) -> dict[str, Any]:
+        """The fields reports share, under their report names."""
+        return dict(
+            samples=self.samples, programs_evaluated=self.evaluated, duplicates_skipped=self.duplicates, failures=self.failures,
+            unusable_outputs=self.unusable, interrupted=self.interrupted, evaluations=self.evaluations, steps=self.steps,
+            valid_program_rate=self.valid_program_rate, duplicate_rate=self.duplicate_rate, tokens_per_second=self.tokens_per_second,
+        )

@@ -1,0 +1,249 @@
+"""The sandbox worker process: `python -m colmo.sandbox.worker FD PARENT_PID`.
+
+A worker is a fresh interpreter (never a fork of the coordinator, so it holds none of its
+secrets) started by `colmo.sandbox.process` with a clean environment, in a session of its own,
+its working directory a private temporary directory, unable to write files (file size limit
+0) and, where the kernel allows, in a network namespace of its own (then it has no network at
+all). It is trusted: it never runs program code. It prepares what evaluations need (imports,
+module templates, each task's simulator, each episode's initial state) and then, for every
+request, forks a child that confines itself (`colmo.sandbox.confine`) and runs the program.
+So every evaluation runs in a process that no earlier program touched, and nothing a program
+does survives it: not a counter kept across GFO candidates, not a change to numpy's shared
+objects, not a change to the evaluator.
+
+- `fast` requests: the child runs the simulator and the policy together and writes its
+  `Evaluation` (JSON) to a pipe; the worker reads at most `_MAX_REPLY_BYTES` of it.
+- `referee` requests: the child only maps observations to actions; the worker runs the
+  simulator and computes the returns (`colmo.sandbox.referee`).
+
+The worker owns the request's wall-clock limit: past it the child is killed (`timeout: ...`).
+A child that dies reports how (`crash: segmentation fault`, `cpu time: ...`). Replies to the
+coordinator are JSON over the connection it was given.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import dataclasses
+import gc
+import json
+import os
+import select
+import signal
+import sys
+import time
+from multiprocessing.connection import Connection
+from typing import Any, Callable
+
+from colmo.errors import describe_exception
+from colmo.evaluation import FAST, REFEREE, EvalRequest, Evaluation
+from colmo.sandbox.confine import enter_sandbox
+from colmo.sandbox.namespace import load_or_explain, template
+from colmo.sandbox.referee import RefereeTimeout, referee_evaluation, serve_policy
+from colmo.task import Environment, evaluate_policy
+
+_PR_SET_PDEATHSIG = 1
+_CLONE_NEWUSER, _CLONE_NEWNET = 0x10000000, 0x40000000
+_MAX_REPLY_BYTES = 1 << 20
+_EXIT_GRACE_S = 1.0
+_CHILD_EXITS = {
+    signal.SIGKILL: "crash: the evaluation process was killed (SIGKILL): out of memory, or killed from outside",
+    signal.SIGXCPU: "cpu time: the evaluation exceeded its CPU time limit",
+    signal.SIGSEGV: "crash: segmentation fault",
+    signal.SIGSYS: "crash: a forbidden system call",
+}
+
+
+class Worker:
+    """What a worker keeps between requests: simulators by (spec, options), and module templates."""
+
+    def __init__(self) -> None:
+        self.environments: dict[tuple, Environment] = {}
+
+    def environment(self, request: EvalRequest) -> Environment:
+        key = (request.spec, request.env)
+        if key not in self.environments:
+            from colmo.spec import load_spec
+
+            self.environments[key] = load_spec(request.spec).make_environment(**dict(request.env))
+        env = self.environments[key]
+        for seed in request.seeds:  # initial states, computed once here and inherited by every child
+            env.reset(seed)
+        return env
+
+    def evaluate(self, request: EvalRequest) -> Evaluation:
+        try:
+            env = self.environment(request)
+            for name in request.allowed_imports:
+                template(name)
+        except Exception as error:  # the spec is the user's, not the program's: say so
+            return Evaluation(failure=f"environment: {type(error).__name__}: {error}")
+        # What exists now is shared with every child: keep their collections from touching it.
+        gc.freeze()
+        start = time.monotonic()
+        deadline = start + request.timeout_s
+        if request.mode == REFEREE:
+            evaluation = self._referee(env, request, deadline)
+        elif request.mode == FAST:
+            evaluation = self._fast(env, request, deadline)
+        else:
+            evaluation = Evaluation(failure=f"invalid: unknown evaluation mode {request.mode!r}")
+        return dataclasses.replace(evaluation, seconds=time.monotonic() - start)
+
+    def _fast(self, env: Environment, request: EvalRequest, deadline: float) -> Evaluation:
+        read_fd, write_fd = os.pipe()
+        pid = _fork_child(request, keep=(write_fd,), run=lambda: _write_all(write_fd, _run_program(env, request).to_bytes()))
+        os.close(write_fd)
+        try:
+            data = _read_reply(read_fd, deadline)
+        finally:
+            os.close(read_fd)
+        failure = _reap(pid, request, deadline, timed_out=data is None)
+        if failure:
+            return Evaluation(failure=failure)
+        try:
+            return Evaluation.from_bytes(data)
+        except ValueError:
+            return Evaluation(failure="crash: the evaluation process sent a malformed reply")
+
+    def _referee(self, env: Environment, request: EvalRequest, deadline: float) -> Evaluation:
+        observations_read, observations_write = os.pipe()  # worker -> child
+        actions_read, actions_write = os.pipe()  # child -> worker
+        serve = lambda: serve_policy(request, env.action_size, observations_read, actions_write)  # noqa: E731
+        pid = _fork_child(request, keep=(observations_read, actions_write), run=serve)
+        os.close(observations_read)
+        os.close(actions_write)
+        evaluation, timed_out = None, False
+        try:
+            evaluation = referee_evaluation(env, request, actions_read, observations_write, deadline)
+        except RefereeTimeout:
+            timed_out = True
+        except (EOFError, OSError, ValueError):  # the child died or broke the protocol
+            pass
+        finally:
+            os.close(actions_read)
+            os.close(observations_write)
+        failure = _reap(pid, request, deadline, timed_out)
+        if evaluation is None:
+            return Evaluation(failure=failure or "tampering: the policy process broke the referee protocol")
+        return evaluation
+
+
+def _run_program(env: Environment, request: EvalRequest) -> Evaluation:
+    """In the child: the program's fast-path evaluation."""
+    policy, failure = load_or_explain(request.skeleton, request.allowed_imports, request.params)
+    if failure:
+        return Evaluation(failure=failure)
+    try:
+        return evaluate_policy(env, policy, request.seeds, request.steps, request.race)
+    except BaseException as error:  # SystemExit and friends raised by the policy
+        return Evaluation(failure=describe_exception(error))
+
+
+def _fork_child(request: EvalRequest, keep: tuple[int, ...], run: Callable[[], Any]) -> int:
+    """Fork a child that confines itself, runs `run` and exits without running any clean-up
+    code (nothing of the program runs after its reply)."""
+    pid = os.fork()
+    if pid:
+        return pid
+    code = 70  # the child's own machinery failed (EX_SOFTWARE)
+    try:
+        enter_sandbox(keep, request.memory_mb, request.timeout_s)
+        run()
+        code = 0
+    finally:
+        os._exit(code)
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    while data:
+        data = data[os.write(fd, data):]
+
+
+def _read_reply(fd: int, deadline: float) -> bytes | None:
+    """The child's whole reply (up to end of file); None if the deadline passes first."""
+    chunks, size = [], 0
+    while True:
+        remaining = deadline - time.monotonic()
+        if remaining <= 0 or not select.select([fd], [], [], remaining)[0]:
+            return None
+        chunk = os.read(fd, 65536)
+        if not chunk or size > _MAX_REPLY_BYTES:
+            return b"".join(chunks)
+        chunks.append(chunk)
+        size += len(chunk)
+
+
+def _reap(pid: int, request: EvalRequest, deadline: float, timed_out: bool) -> str | None:
+    """Collect the child, killing it if it is still running at the deadline (a child that has
+    replied is exiting: it gets `_EXIT_GRACE_S` more); the failure its end means, if any."""
+    if not timed_out:
+        pidfd = os.pidfd_open(pid)
+        try:
+            timed_out = not select.select([pidfd], [], [], max(deadline - time.monotonic(), 0) + _EXIT_GRACE_S)[0]
+        finally:
+            os.close(pidfd)
+    if timed_out:
+        os.kill(pid, signal.SIGKILL)
+    _, status = os.waitpid(pid, 0)
+    if timed_out:
+        return f"timeout: the evaluation took longer than {request.timeout_s:g} s"
+    if os.WIFSIGNALED(status):
+        code = os.WTERMSIG(status)
+        return _CHILD_EXITS.get(code, f"crash: the evaluation process was killed by {signal.Signals(code).name}")
+    if os.WEXITSTATUS(status) != 0:
+        return f"crash: the evaluation process exited with code {os.WEXITSTATUS(status)}"
+    return None
+
+
+def _isolate(parent_pid: int) -> None:
+    """Start-up hardening of the worker itself: it dies with the coordinator, and has no
+    network where the kernel lets it leave the host's network namespace."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent_pid:  # the coordinator died before prctl took effect
+        os._exit(1)
+    # Best effort: needs root, or unprivileged user namespaces for the second form.
+    if libc.unshare(_CLONE_NEWNET) != 0:
+        libc.unshare(_CLONE_NEWUSER | _CLONE_NEWNET)
+
+
+def _confinement_report() -> bytes:
+    """The layers of confinement a child gets on this machine, found by confining a child that
+    runs nothing (JSON: `layers`, `warnings`)."""
+    read_fd, write_fd = os.pipe()
+    pid = os.fork()
+    if not pid:
+        try:
+            confinement = enter_sandbox((write_fd,), memory_mb=1024, cpu_seconds=10)
+            _write_all(write_fd, json.dumps(dataclasses.asdict(confinement)).encode())
+        finally:
+            os._exit(0)
+    os.close(write_fd)
+    report = _read_reply(read_fd, time.monotonic() + 30) or b'{"layers": [], "warnings": ["confinement: the probe failed"]}'
+    os.close(read_fd)
+    os.waitpid(pid, 0)
+    return report
+
+
+def main(fd: int, parent_pid: int) -> None:
+    _isolate(parent_pid)
+    connection = Connection(fd)
+    worker = Worker()
+    connection.send_bytes(b"ready " + _confinement_report())
+    while True:
+        try:
+            request = connection.recv()
+        except (EOFError, OSError):
+            return
+        if request is None:
+            return
+        try:
+            evaluation = worker.evaluate(request)
+        except Exception as error:  # a bug here must reach the coordinator, not hang it
+            evaluation = Evaluation(failure=f"crash: the sandbox worker failed: {type(error).__name__}: {error}")
+        connection.send_bytes(evaluation.to_bytes())
+
+
+if __name__ == "__main__":
+    main(int(sys.argv[1]), int(sys.argv[2]))

@@ -1,0 +1,218 @@
+"""One-step simplifications of a policy program: the deletions the greedy stage tries.
+
+`deletion_candidates` lists every one-step simplification: delete a statement, keep one branch
+of an `if` statement or of a conditional expression, drop a term of a sum or difference, a
+factor of a product, a divisor or an exponent, merge two constant factors (`2.0 * (3.0 * x)`
+-> `6.0 * x`), unwrap a call to one of its arguments
+(`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), keep one operand of `and`/`or`, and replace a
+subexpression that no drop covers (a call argument, a compared value, an assigned or returned
+value, a branch) by 0.0 or 1.0. The last `return` of the policy is never deleted (a policy
+returning None always fails). Each candidate is cleaned by `remove_dead_code`, so what a
+deletion leaves dead goes with it, and must be strictly smaller (`colmo.astutil.node_count`);
+duplicates (same code) are dropped. Nothing here judges a candidate: scores do.
+"""
+
+from __future__ import annotations
+
+import ast
+import copy
+import math
+from dataclasses import dataclass
+from typing import Any, Callable, Iterator, Optional
+
+from colmo.astutil import is_number_literal, node_count, strip_docstrings
+from colmo.simplify.deadcode import FUNCTIONS, own_statements, remove_dead_code
+from colmo.simplify.fold import number_literal
+
+
+@dataclass(frozen=True)
+class Candidate:
+    description: str  # what was deleted, with its line in the code it was deleted from
+    code: str  # the program after the deletion and `remove_dead_code`
+    nodes: int  # its AST nodes, `colmo.astutil.node_count`
+
+
+# Where an expression is not a value to simplify: indices, called functions, attribute owners,
+# assignment targets, and what only the interpreter reads.
+_OPAQUE = {(ast.Subscript, "slice"), (ast.Subscript, "value"), (ast.Call, "func"), (ast.Attribute, "value")}
+_NOT_VALUES = ("targets", "target", "decorator_list", "annotation", "returns", "args")  # `args` of a def, not of a call
+_DROP_SIDES = {
+    ast.Add: ("left", "right"), ast.Sub: ("left", "right"), ast.Mult: ("left", "right"),
+    ast.Div: ("left",), ast.Pow: ("left",), ast.Mod: ("left",), ast.FloorDiv: ("left",),
+}
+_TERM_WORDS = {ast.Add: "term", ast.Sub: "term", ast.Mult: "factor", ast.Div: "divisor", ast.Pow: "exponent", ast.Mod: "modulus", ast.FloorDiv: "divisor"}
+
+
+def _short(node: ast.AST, limit: int = 60) -> str:
+    text = ast.unparse(node)
+    first = text.splitlines()[0] if text else text
+    return first if len(first) <= limit and first == text else first[: limit - 3] + "..."
+
+
+def _parents(tree: ast.AST) -> dict[int, tuple[ast.AST, str, Optional[int]]]:
+    """Each node's parent, the field holding it and its index in that field (None: not a list)."""
+    parents: dict[int, tuple[ast.AST, str, Optional[int]]] = {}
+    for node in ast.walk(tree):
+        for name, value in ast.iter_fields(node):
+            if isinstance(value, list):
+                for i, child in enumerate(value):
+                    if isinstance(child, ast.AST):
+                        parents[id(child)] = (node, name, i)
+            elif isinstance(value, ast.AST):
+                parents[id(value)] = (node, name, None)
+    return parents
+
+
+def _value_positions(tree: ast.Module) -> Iterator[ast.expr]:
+    """Expressions inside functions that are values a deletion may rewrite, in `ast.walk` order."""
+    opaque: set[int] = set()
+    for node in ast.walk(tree):
+        for name, value in ast.iter_fields(node):
+            children = value if isinstance(value, list) else [value]
+            if (type(node), name) in _OPAQUE or (name in _NOT_VALUES and not isinstance(node, ast.Call)):
+                opaque.update(id(n) for child in children if isinstance(child, ast.AST) for n in ast.walk(child))
+    inside_functions = {id(n) for f in ast.walk(tree) if isinstance(f, FUNCTIONS) for s in f.body for n in ast.walk(s)}
+    for node in ast.walk(tree):
+        stored = isinstance(getattr(node, "ctx", None), (ast.Store, ast.Del))
+        if isinstance(node, ast.expr) and id(node) in inside_functions and id(node) not in opaque and not stored:
+            yield node
+
+
+# An edit applies a deletion to (a copy of) a node, given the node's parent, field and index.
+Edit = Callable[[ast.AST, ast.AST, str, Optional[int]], None]
+
+
+def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AST, str, Optional[int]]]) -> Iterator[tuple[ast.AST, str, Edit]]:
+    """(node, description, edit) for every deletion, in source-walk order."""
+
+    def replace_with(make: Callable[[ast.AST], ast.AST]) -> Edit:
+        def edit(node: ast.AST, parent: ast.AST, name: str, index: Optional[int]) -> None:
+            replacement = make(node)
+            if index is None:
+                setattr(parent, name, replacement)
+            else:
+                getattr(parent, name)[index] = replacement
+        return edit
+
+    def splice(make: Callable[[ast.AST], list[ast.stmt]]) -> Edit:
+        def edit(node: ast.AST, parent: ast.AST, name: str, index: Optional[int]) -> None:
+            block = getattr(parent, name)
+            block[index : index + 1] = make(node)
+            if not block and name == "body":
+                block.append(ast.Pass())
+        return edit
+
+    functions = [n for n in ast.walk(tree) if isinstance(n, FUNCTIONS)]
+    for function in functions:
+        # Without its last statement, a `return`, the policy returns None: always a failure.
+        final_return = function.body[-1] if function.name == function_name and isinstance(function.body[-1], ast.Return) else None
+        for statement in own_statements(function.body):
+            where = f"line {statement.lineno}"
+            if not isinstance(statement, ast.Pass) and statement is not final_return:
+                yield statement, f"deleted `{_short(statement)}` at {where}", splice(lambda s: [])
+            if isinstance(statement, ast.If):
+                test = _short(statement.test, 40)
+                yield statement, f"kept only the body of `if {test}` at {where}", splice(lambda s: s.body)
+                if statement.orelse:
+                    yield statement, f"kept only the else branch of `if {test}` at {where}", splice(lambda s: s.orelse)
+    for node in _value_positions(tree):
+        where = f"line {node.lineno}"
+        if isinstance(node, ast.IfExp):
+            test = _short(node.test, 40)
+            yield node, f"kept only the if-side of `... if {test} else ...` at {where}", replace_with(lambda n: n.body)
+            yield node, f"kept only the else-side of `... if {test} else ...` at {where}", replace_with(lambda n: n.orelse)
+        elif isinstance(node, ast.BinOp) and type(node.op) in _DROP_SIDES:
+            word = _TERM_WORDS[type(node.op)]
+            for side in _DROP_SIDES[type(node.op)]:
+                kept, dropped = (node.left, node.right) if side == "left" else (node.right, node.left)
+                if side == "right" and isinstance(node.op, ast.Sub):
+                    yield node, f"dropped the term `{_short(dropped)}` at {where}", replace_with(lambda n: _negated(n.right))
+                else:
+                    yield node, f"dropped the {word} `{_short(dropped)}` at {where}", replace_with(lambda n, side=side: getattr(n, side))
+            if _merged_factors(node) is not None:
+                yield node, f"merged the constant factors of `{_short(node)}` at {where}", replace_with(_merged_factors)
+        elif isinstance(node, ast.BoolOp):
+            for i, value in enumerate(node.values):
+                yield node, f"kept only `{_short(value)}` of `{_short(node, 40)}` at {where}", replace_with(lambda n, i=i: n.values[i])
+        elif isinstance(node, ast.Call):
+            for i, argument in enumerate(node.args):
+                if not is_number_literal(argument) and not isinstance(argument, ast.Starred):
+                    yield node, f"unwrapped `{_short(node)}` to `{_short(argument)}` at {where}", replace_with(lambda n, i=i: n.args[i])
+        parent, name, _ = parents[id(node)]
+        covered = isinstance(parent, ast.BinOp) and type(parent.op) in _DROP_SIDES and (name == "left" or type(parent.op) in (ast.Add, ast.Sub, ast.Mult))
+        if not covered and not is_number_literal(node) and not isinstance(node, ast.Constant):
+            for value in (0.0, 1.0):
+                yield node, f"replaced `{_short(node)}` by {value} at {where}", replace_with(lambda n, value=value: ast.Constant(value))
+
+
+_MERGED_DIGITS = 6  # significant digits of a merged constant: 6.2846, not 6.284600000000001
+
+
+def _merged_factors(node: ast.AST) -> Optional[ast.expr]:
+    """`c1 * (c2 * x)`, in any order of the factors, as `c * x` with c = c1 * c2 to
+    `_MERGED_DIGITS` digits: one constant fewer. Not a static fold, since the product rounds
+    differently, so it is scored like a deletion."""
+    if not (isinstance(node, ast.BinOp) and isinstance(node.op, ast.Mult)):
+        return None
+    for literal, product in ((node.left, node.right), (node.right, node.left)):
+        if is_number_literal(literal) and isinstance(product, ast.BinOp) and isinstance(product.op, ast.Mult):
+            for inner, rest in ((product.left, product.right), (product.right, product.left)):
+                if is_number_literal(inner):
+                    value = ast.literal_eval(literal) * ast.literal_eval(inner)
+                    if not math.isfinite(value):
+                        return None
+                    if isinstance(value, float):
+                        value = float(f"{value:.{_MERGED_DIGITS}g}")
+                    return ast.BinOp(number_literal(value), ast.Mult(), rest)
+    return None
+
+
+def _negated(node: ast.expr) -> ast.expr:
+    """`-node`, with the sign on a leading literal factor: `-(0.3 * x)` is `-0.3 * x`, exactly."""
+    if is_number_literal(node):
+        return number_literal(-ast.literal_eval(node))
+    if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Mult, ast.Div)) and is_number_literal(node.left):
+        return ast.BinOp(_negated(node.left), node.op, node.right)
+    return ast.UnaryOp(ast.USub(), node)
+
+
+def deletion_candidates(code: str, function_name: str = "policy") -> list[Candidate]:
+    """Every one-step simplification of `code` (see the module docstring), each cleaned by
+    `remove_dead_code`, strictly smaller than `code`, without duplicates, in source-walk order."""
+    tree = ast.parse(code)
+    strip_docstrings(tree)
+    nodes = node_count(tree)
+    seen = {ast.dump(ast.parse(remove_dead_code(code, function_name)))}
+    candidates: list[Candidate] = []
+    parents = _parents(tree)
+    walk_order = {id(node): i for i, node in enumerate(ast.walk(tree))}
+    source = ast.unparse(tree)
+    # Each deletion edits a fresh copy: parsing the source again is much faster than deepcopy,
+    # and gives the same tree, walked in the same order, whenever unparsing loses nothing.
+    reparses = ast.dump(ast.parse(source)) == ast.dump(tree)
+    for node, description, edit in _edits(tree, function_name, parents):
+        parent, name, index = parents[id(node)]
+        if reparses:
+            copied = ast.parse(source)
+            walked = list(ast.walk(copied))
+            edit(walked[walk_order[id(node)]], walked[walk_order[id(parent)]], name, index)
+        else:
+            copies: dict[int, Any] = {}  # deepcopy's memo: each original node's copy, by id
+            copied = copy.deepcopy(tree, copies)
+            edit(copies[id(node)], copies[id(parent)], name, index)
+        try:
+            new_code = remove_dead_code(ast.unparse(ast.fix_missing_locations(copied)), function_name)
+            new_tree = ast.parse(new_code)
+        except (SyntaxError, ValueError, RecursionError):
+            continue
+        dump, new_nodes = ast.dump(new_tree), node_count(new_tree)
+        if dump in seen or new_nodes >= nodes or not _defines(new_tree, function_name):
+            continue
+        seen.add(dump)
+        candidates.append(Candidate(description, new_code, new_nodes))
+    return candidates
+
+
+def _defines(tree: ast.Module, function_name: str) -> bool:
+    return any(isinstance(s, FUNCTIONS) and s.name == function_name for s in tree.body)
+

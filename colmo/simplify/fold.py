@@ -1,0 +1,129 @@
+"""Constant folding: numeric subexpressions whose operands are all literals become one literal.
+
+`np.abs(4.4)` -> `4.4`, `2.0 * 3.0` -> `6.0`, `np.pi / 6` -> one literal, `2 > 1` -> `True`,
+`x if True else y` -> `x`; and `-(-x)` -> `x` where only the value is used (an operand of
+arithmetic or of a comparison). Folding evaluates only literals, with the trusted functions of
+`colmo.simplify.scope.FOLDABLE` (never `exec`/`eval`), and follows Python's number semantics,
+so integer literals (indices, sizes) stay integers. What would raise or warn at run time
+(`1.0 / 0.0`, `np.log(0.0)`), overflow, or give something other than a finite number of
+modest size is left for the program to do.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+import operator
+from typing import Callable, Optional
+
+import numpy as np
+
+from colmo.astutil import is_number_literal
+from colmo.simplify.scope import NOT_A_LITERAL, Scope
+
+_BINARY = {
+    ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
+    ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod, ast.Pow: operator.pow,
+}
+_UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos, ast.Not: operator.not_, ast.Invert: operator.invert}
+_COMPARE = {ast.Lt: operator.lt, ast.LtE: operator.le, ast.Gt: operator.gt, ast.GtE: operator.ge, ast.Eq: operator.eq, ast.NotEq: operator.ne}
+_MAX_EXACT_INT = 2**53
+
+
+def number_literal(value: int | float | bool) -> ast.expr:
+    """The literal for a value; a negative number is written `-x`, as `colmo.program` does."""
+    if isinstance(value, bool) or not math.copysign(1.0, value) < 0:
+        return ast.Constant(value)
+    return ast.UnaryOp(ast.USub(), ast.Constant(-value))
+
+
+def _plain_number(value: object) -> object:
+    """`value` as a Python int, float or bool if it is an exact, finite, modest one, else `NOT_A_LITERAL`."""
+    if isinstance(value, np.generic) and value.shape == ():
+        value = value.item()
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int):
+        return value if abs(value) <= _MAX_EXACT_INT else NOT_A_LITERAL
+    if isinstance(value, float):
+        return value if math.isfinite(value) else NOT_A_LITERAL
+    return NOT_A_LITERAL
+
+
+def _safe_power(base: object, exponent: object) -> object:
+    # Integer powers grow without bound: refuse what could exceed the exact-integer range.
+    if isinstance(base, int) and isinstance(exponent, int) and exponent > 0 and abs(base) > 1 and exponent * abs(base).bit_length() > 53:
+        return NOT_A_LITERAL
+    return operator.pow(base, exponent)
+
+
+def undouble(node: ast.expr) -> ast.expr:
+    """`-(-x)` -> `x`, for an operand whose value is all that is used."""
+    while isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub) and isinstance(node.operand, ast.UnaryOp) and isinstance(node.operand.op, ast.USub):
+        node = node.operand.operand
+    return node
+
+
+class Fold(ast.NodeTransformer):
+    """Bottom-up constant folding of a module whose names `scope` resolves (module docstring)."""
+
+    def __init__(self, scope: Scope):
+        self.scope = scope
+
+    def _evaluate(self, function: Callable[..., object], *operands: ast.AST) -> Optional[ast.expr]:
+        values = [self.scope.value(operand) for operand in operands]
+        if any(value is NOT_A_LITERAL for value in values):
+            return None
+        try:
+            with np.errstate(all="raise"):
+                result = _plain_number(function(*values))
+        except (ArithmeticError, ValueError, TypeError, FloatingPointError):
+            return None  # the program raises or warns here at run time: leave that to it
+        return None if result is NOT_A_LITERAL else number_literal(result)
+
+    def visit_BinOp(self, node: ast.BinOp) -> ast.expr:
+        self.generic_visit(node)
+        node.left, node.right = undouble(node.left), undouble(node.right)
+        function = _safe_power if isinstance(node.op, ast.Pow) else _BINARY.get(type(node.op))
+        return (function and self._evaluate(function, node.left, node.right)) or node
+
+    def visit_UnaryOp(self, node: ast.UnaryOp) -> ast.expr:
+        self.generic_visit(node)
+        if is_number_literal(node):
+            return node
+        return self._evaluate(_UNARY[type(node.op)], node.operand) or node
+
+    def visit_Call(self, node: ast.Call) -> ast.expr:
+        self.generic_visit(node)
+        function = self.scope.foldable(node)
+        if function is None or node.keywords or any(isinstance(arg, ast.Starred) for arg in node.args):
+            return node
+        return self._evaluate(function, *node.args) or node
+
+    def visit_Compare(self, node: ast.Compare) -> ast.expr:
+        self.generic_visit(node)
+        if not all(type(op) in _COMPARE for op in node.ops):
+            return node  # `is` and `in` may depend on identity, not value
+        node.left, node.comparators = undouble(node.left), [undouble(c) for c in node.comparators]
+
+        def chain(*values: object) -> bool:
+            return all(_COMPARE[type(op)](a, b) for op, a, b in zip(node.ops, values, values[1:]))
+
+        return self._evaluate(chain, node.left, *node.comparators) or node
+
+    def visit_BoolOp(self, node: ast.BoolOp) -> ast.expr:
+        self.generic_visit(node)
+        values = list(node.values)
+        # Only leading constants decide anything: `x and True` still returns x's value.
+        while len(values) > 1 and isinstance(values[0], ast.Constant):
+            if bool(values[0].value) == isinstance(node.op, ast.And):
+                values.pop(0)  # a true `and` operand (false `or` operand) passes on to the next
+            else:
+                return values[0]  # it is the result; the rest never runs
+        return values[0] if len(values) == 1 else ast.BoolOp(node.op, values)
+
+    def visit_IfExp(self, node: ast.IfExp) -> ast.expr:
+        self.generic_visit(node)
+        if isinstance(node.test, ast.Constant):
+            return node.body if node.test.value else node.orelse
+        return node

@@ -1,0 +1,279 @@
+"""The measured greedy simplification: the static clean-up, then deletions, then re-tuning.
+
+`simplify` owns the algorithm, not the running of programs: programs are scored by an injected
+`Scoring` (in colmo, the referee in sandboxed workers, on the task's training and held-out
+episodes: `colmo.simplify.sandboxed`) and constants are re-tuned by an injected `Retune` (the
+GFO), so this module never executes policy code.
+
+1. The original program and its `remove_dead_code` version are both scored; the clean-up is
+   kept only if the scores are the same, which confirms it changed nothing.
+2. Round after round, every `deletion_candidates` of the current program is scored and the
+   acceptable one that removes the most AST nodes is kept, until none is acceptable (or
+   `max_rounds`, or `stop()`). Candidates are scored on the training episodes, largest deletion
+   first, in batches of `batch_size` (None: the whole round at once); batching stops once no
+   unscored candidate could beat the best acceptable one. Held-out scores are needed only to
+   decide between candidates that pass on the training episodes, so only those are scored on
+   the held-out episodes, best first, until one is accepted. The choice is the same as if
+   every candidate had been scored on every episode.
+3. `retune` re-tunes the constants of the result; the re-tuned code is kept if its training
+   score is higher and its held-out gap passes the rule below.
+
+The acceptance rule
+-------------------
+Every score is measured: the original program, the cleaned one, the candidates, the re-tuned
+code. The reference is the ORIGINAL program's scores, not the current program's, so accepted
+losses never compound past the tolerance: every accepted program keeps
+    train >= ref.train - allowed,  allowed = tolerance * |ref.train| + noise,
+with noise = 1e-9 * max(1, |ref.train|) for floating-point round-off. Relative to |ref.train|,
+the rule reads the same for positive and negative scores (-100 may fall to -101 at 1%); a
+reference of exactly 0 allows no loss beyond the noise. The held-out gap (train - held-out) may
+not grow by more than `allowed` over the original's gap, so a deletion that fits the training
+episodes at the expense of the held-out ones is refused; together the two rules keep
+held-out >= ref.heldout - 2 * allowed. A failed program scores -inf and is never accepted.
+Among acceptable candidates the largest node reduction wins, then the higher training score,
+then the first in source order, so a run is a deterministic function of the scores.
+"""
+
+from __future__ import annotations
+
+import ast
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Optional, Sequence
+
+from colmo.program import ProgramSize, measure, parametrize
+from colmo.simplify.candidates import Candidate, deletion_candidates
+from colmo.simplify.deadcode import remove_dead_code
+
+log = logging.getLogger("colmo.simplify")
+
+ScoreBatch = Callable[[Sequence[str]], list[float]]
+"""The mean returns of a batch of program codes, in order (-inf: the program failed); the
+programs of a batch are scored in parallel."""
+Retune = Callable[[str], str]
+"""Returns the code with its constants re-tuned (colmo's GFO)."""
+
+
+class ProgramFails(ValueError):
+    """The original program fails on the training episodes: there is no score to keep."""
+
+
+@dataclass(frozen=True)
+class Scoring:
+    """How programs are scored: on the training episodes and on the held-out ones."""
+
+    train: ScoreBatch
+    heldout: ScoreBatch
+
+
+@dataclass(frozen=True)
+class Scores:
+    """A program's mean return on the training episodes and on the held-out ones (-inf: failed)."""
+
+    train: float
+    heldout: float
+
+    @property
+    def gap(self) -> float:
+        return self.train - self.heldout
+
+
+@dataclass(frozen=True)
+class Step:
+    """One accepted simplification and the program it left."""
+
+    description: str
+    code: str
+    scores: Scores
+    size: ProgramSize
+
+    def to_json(self) -> dict[str, Any]:
+        return {"description": self.description, "score": _finite(self.scores.train), "heldout_score": _finite(self.scores.heldout), "size": self.size.nodes}
+
+
+@dataclass(frozen=True)
+class SimplifyResult:
+    code_initial: str
+    code: str
+    scores_initial: Scores
+    scores: Scores
+    size_initial: ProgramSize
+    size: ProgramSize
+    steps: tuple[Step, ...]  # accepted steps in order: the static clean-up, deletions, re-tuning
+    programs_scored: int  # programs scored on the training episodes, the original included
+    heldout_scored: int  # programs also scored on the held-out episodes
+    rounds: int  # greedy rounds run (the last found nothing acceptable, unless cut short)
+    static_pass_confirmed: bool  # False: the cleaned program scored differently, so it was not used
+    retuned: bool  # the re-tuned code scored better and was kept
+    seconds: float
+
+    def to_json(self) -> dict[str, Any]:
+        """The report's fields; sizes are AST node counts; non-finite scores are None (JSON has
+        no infinities)."""
+        return {
+            "score_initial": _finite(self.scores_initial.train),
+            "heldout_score_initial": _finite(self.scores_initial.heldout),
+            "score": _finite(self.scores.train),
+            "heldout_score": _finite(self.scores.heldout),
+            "size_initial": self.size_initial.nodes,
+            "size": self.size.nodes,
+            "lines_initial": self.size_initial.lines,
+            "lines": self.size.lines,
+            "n_params_initial": self.size_initial.params,
+            "n_params": self.size.params,
+            "code_initial": self.code_initial,
+            "code": self.code,
+            "steps": [step.to_json() for step in self.steps],
+            "programs_scored": self.programs_scored,
+            "heldout_scored": self.heldout_scored,
+            "rounds": self.rounds,
+            "static_pass_confirmed": self.static_pass_confirmed,
+            "retuned": self.retuned,
+            "seconds": round(self.seconds, 3),
+        }
+
+
+def _finite(value: float) -> Optional[float]:
+    return value if math.isfinite(value) else None
+
+
+@dataclass
+class _Scorer:
+    """Scores programs through the injected `Scoring`, each distinct code once per episode set."""
+
+    scoring: Scoring
+    train_scores: dict[str, float] = field(default_factory=dict)
+    heldout_scores: dict[str, float] = field(default_factory=dict)
+
+    @staticmethod
+    def _scored(codes: Sequence[str], score_batch: ScoreBatch, cache: dict[str, float]) -> list[float]:
+        new = list(dict.fromkeys(c for c in codes if c not in cache))
+        if new:
+            results = score_batch(new)
+            if len(results) != len(new):
+                raise ValueError(f"the scoring returned {len(results)} scores for {len(new)} programs")
+            cache.update(zip(new, results))
+        return [cache[c] for c in codes]
+
+    def train(self, codes: Sequence[str]) -> list[float]:
+        return self._scored(codes, self.scoring.train, self.train_scores)
+
+    def heldout(self, codes: Sequence[str]) -> list[float]:
+        return self._scored(codes, self.scoring.heldout, self.heldout_scores)
+
+    def both(self, codes: Sequence[str]) -> list[Scores]:
+        return [Scores(t, h) for t, h in zip(self.train(codes), self.heldout(codes))]
+
+
+@dataclass(frozen=True)
+class _Rule:
+    """The acceptance rule of the module docstring, against the original program's scores."""
+
+    reference: Scores
+    tolerance: float
+
+    @property
+    def allowed(self) -> float:
+        scale = abs(self.reference.train)
+        return self.tolerance * scale + 1e-9 * max(1.0, scale)
+
+    def passes_training(self, train: float) -> bool:
+        return train >= self.reference.train - self.allowed
+
+    def accepts(self, scores: Scores) -> bool:
+        return self.passes_training(scores.train) and scores.gap <= self.reference.gap + self.allowed
+
+
+def _same_scores(a: Scores, b: Scores) -> bool:
+    return all(x == y or abs(x - y) <= 1e-9 * max(1.0, abs(x)) for x, y in ((a.train, b.train), (a.heldout, b.heldout)))
+
+
+def _same_code(a: str, b: str) -> bool:
+    return ast.dump(ast.parse(a)) == ast.dump(ast.parse(b))
+
+
+def simplify(
+    code: str,
+    scoring: Scoring,
+    retune: Optional[Retune] = None,
+    tolerance: float = 0.01,
+    max_rounds: int = 200,
+    batch_size: Optional[int] = None,
+    function_name: str = "policy",
+    stop: Callable[[], bool] = lambda: False,
+) -> SimplifyResult:
+    """Simplify `code` (module docstring) and report what it cost. `stop()` is asked before each
+    round and before re-tuning; once it says so, the best program so far is the result. Raises
+    `ProgramFails` if the original program fails on the training episodes."""
+    if not 0 <= tolerance < 1:
+        raise ValueError(f"tolerance must be in [0, 1), got {tolerance}")
+    if batch_size is not None and batch_size < 1:
+        raise ValueError(f"batch_size must be positive, got {batch_size}")
+    start = time.perf_counter()
+    scorer = _Scorer(scoring)
+    cleaned = remove_dead_code(code, function_name)
+    scores_initial, scores_cleaned = scorer.both([code, cleaned])
+    if not math.isfinite(scores_initial.train):
+        raise ProgramFails("the program fails on the training episodes: there is no score to keep")
+    rule = _Rule(scores_initial, tolerance)
+    steps: list[Step] = []
+    confirmed = _same_scores(scores_initial, scores_cleaned)
+    current, scores = code, scores_initial
+    if confirmed and not _same_code(cleaned, code):
+        current, scores = cleaned, scores_cleaned
+        steps.append(Step("removed dead code and folded constants", cleaned, scores, measure(cleaned)))
+
+    rounds = 0
+    while rounds < max_rounds and not stop():
+        rounds += 1
+        candidates = deletion_candidates(current, function_name)
+        choice = _best_deletion(candidates, scorer, rule, batch_size)
+        if choice is None:
+            log.info("round %d: none of %d deletions is acceptable", rounds, len(candidates))
+            break
+        candidate, scores = choice
+        current = candidate.code
+        steps.append(Step(candidate.description, current, scores, measure(current)))
+        log.info("round %d: %d nodes, training %.2f, held-out %.2f: %s", rounds, candidate.nodes, scores.train, scores.heldout, candidate.description)
+
+    retuned = False
+    if retune is not None and not stop() and parametrize(current, function_name).n_params:
+        tuned = retune(current)
+        if not _same_code(tuned, current):
+            (tuned_train,) = scorer.train([tuned])
+            if tuned_train > scores.train:
+                tuned_scores = Scores(tuned_train, scorer.heldout([tuned])[0])
+                if rule.accepts(tuned_scores):
+                    current, scores, retuned = tuned, tuned_scores, True
+                    steps.append(Step("re-tuned the constants", current, scores, measure(current)))
+
+    return SimplifyResult(
+        code_initial=code, code=current, scores_initial=scores_initial, scores=scores,
+        size_initial=measure(code), size=measure(current), steps=tuple(steps),
+        programs_scored=len(scorer.train_scores), heldout_scored=len(scorer.heldout_scores), rounds=rounds,
+        static_pass_confirmed=confirmed, retuned=retuned, seconds=time.perf_counter() - start,
+    )
+
+
+def _best_deletion(candidates: list[Candidate], scorer: _Scorer, rule: _Rule, batch_size: Optional[int]) -> Optional[tuple[Candidate, Scores]]:
+    """The acceptable candidate removing the most nodes (then scoring best, then first)."""
+    ranked = sorted(range(len(candidates)), key=lambda i: (candidates[i].nodes, i))
+    best: Optional[tuple[tuple[int, float, int], Candidate, Scores]] = None
+    step = batch_size or max(1, len(ranked))
+    for start in range(0, len(ranked), step):
+        if best is not None and candidates[ranked[start]].nodes > best[1].nodes:
+            break  # nothing left removes as much as the best acceptable one
+        chunk = ranked[start : start + step]
+        trains = scorer.train([candidates[i].code for i in chunk])
+        # Held-out scores only for what passes on the training episodes and could still win.
+        contenders = sorted(((-candidates[i].nodes, train, -i) for i, train in zip(chunk, trains) if rule.passes_training(train)), reverse=True)
+        for key in contenders:
+            if best is not None and key <= best[0]:
+                break
+            candidate = candidates[-key[2]]
+            scores = Scores(key[1], scorer.heldout([candidate.code])[0])
+            if rule.accepts(scores):
+                best = (key, candidate, scores)
+    return None if best is None else (best[1], best[2])

@@ -1,0 +1,137 @@
+"""The command line as a user meets it: the console scripts, `--help` built from the schemas for
+the options chosen, shell completion, and one-line errors (exit 2 for a bad value, 1 for a
+runtime failure, no traceback unless `hydra.verbose=true`) whatever Hydra flag is given."""
+
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from mlflow import MlflowClient
+
+BIN = Path(sys.executable).parent
+TINY = ("search.max_samples=2", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false",
+        "executor.workers=1", "search.progress=false")
+# A spec whose environment cannot be built: the coordinator loads the spec (it is fine), the
+# sandboxed workers fail to make the environment when the starter is calibrated.
+SPEC_ENV_RAISES = (
+    '"""A task whose environment cannot be built."""\n\n'
+    "def make_environment(**options):\n    raise RuntimeError('no such robot')\n\n\n"
+    "def policy(obs):\n    return 0.0\n"
+)
+
+
+def script(name: str, *args: str, cwd: Path, timeout: float = 300) -> subprocess.CompletedProcess:
+    """Run an installed console script as a user would, in `cwd`."""
+    path = BIN / name
+    if not path.exists():
+        pytest.skip(f"{name} is not installed (pip install -e .)")
+    return subprocess.run([str(path), *args], cwd=cwd, capture_output=True, text=True, timeout=timeout)
+
+
+def one_error_line(result: subprocess.CompletedProcess, code: int) -> str:
+    """The single `colmo: error:` line of a failed run (colmo's log lines may come before it)."""
+    assert result.returncode == code, (result.returncode, result.stderr)
+    assert "Traceback" not in result.stderr, result.stderr
+    errors = [line for line in result.stderr.splitlines() if line.startswith("colmo: error: ")]
+    assert len(errors) == 1 and result.stderr.rstrip().endswith(errors[0]), result.stderr
+    return errors[0]
+
+
+def test_every_console_script_is_installed():
+    for name in ("colmo", "colmo-optimize", "colmo-evaluate", "colmo-report", "colmo-simplify", "colmo-render"):
+        assert (BIN / name).exists(), name
+
+
+def test_help_explains_groups_and_fields_without_schema_entries(tmp_path):
+    result = script("colmo", "--help", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    text = result.stdout
+    assert text.startswith("colmo: the program search.") and "powered by Hydra" not in text
+    assert "schema" not in text  # Hydra's own help listed mutate_schema, openai_schema, ...
+    for group in ("task", "gfo", "llm", "database", "executor", "tracker"):
+        assert f"\n  {group}\n" in text, group
+    assert "    mutate       * The embedded baseline generator" in text  # the chosen option, marked
+    assert "  gfo.budget=100\n      evaluations per program" in text
+    assert "  task.name=pendulum\n" in text  # the value in the composed config, not the schema's ???
+    assert "  tracker.tracking_uri=null\n" in text  # the default tracker is mlflow
+    assert not list(tmp_path.iterdir())  # help runs nothing
+
+
+def test_help_shows_the_fields_of_the_options_chosen(tmp_path):
+    text = script("colmo", "llm=llamacpp", "gfo=bo", "gfo.budget=7", "--help", cwd=tmp_path).stdout
+    assert "    llamacpp     * In-process llama.cpp" in text and "    mutate         The embedded" in text
+    assert "  llm.model_path=null\n      a local GGUF file" in text and "llm.crossover_rate" not in text
+    assert "  gfo.sampler=tpe\n" in text and "  gfo.budget=7\n" in text
+    optimize = script("colmo-optimize", "tracker=mlflow", "--help", cwd=tmp_path)
+    assert optimize.returncode == 0 and optimize.stdout.startswith("colmo-optimize: tune the constants")
+    assert "  policy_file=???\n" in optimize.stdout and "  tracker.experiment=null\n" in optimize.stdout
+
+
+def test_help_with_a_bad_override_is_one_line(tmp_path):
+    line = one_error_line(script("colmo", "task=nope", "--help", cwd=tmp_path), 2)
+    assert "Could not find 'task/nope'" in line
+
+
+def test_shell_completion_installs_and_completes(tmp_path):
+    result = script("colmo", "-sc", "install=bash", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "hydra_bash_completion" in result.stdout and "complete -o nospace -o default -F hydra_bash_completion colmo" in result.stdout
+    query = subprocess.run(
+        [str(BIN / "colmo"), "-sc", "query=bash"], cwd=tmp_path, capture_output=True, text=True, timeout=120,
+        env={"PATH": str(BIN), "COMP_LINE": "colmo gfo=o", "COMP_POINT": "11"},
+    )
+    assert query.returncode == 0 and "gfo=oneplusone" in query.stdout.split(), query.stderr
+    assert not list(tmp_path.iterdir())
+
+
+def test_cfg_job_prints_the_config_or_one_error_line(tmp_path):
+    good = script("colmo", "--cfg", "job", "gfo.budget=7", cwd=tmp_path)
+    assert good.returncode == 0 and "budget: 7" in good.stdout, good.stderr
+    line = one_error_line(script("colmo", "--cfg", "job", "task=nope", cwd=tmp_path), 2)
+    assert "Could not find 'task/nope'; available: a1, ball_in_cup, cheetah, pendulum, quadruped" in line
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("overrides, message", [
+    (["seed=-1"], "seed must be >= 0, got -1"),
+    (["-m", "seed=0,-1"], "seed must be >= 0, got -1"),  # every value of a sweep is checked before any job runs
+    (["-m", "gfo.budget=tag(int,interval(0,4))"], "gfo.budget must be >= 1, got 0"),  # the ends of a sweeper's interval too
+    (["hydra.run.dir=/proc/colmo/run"], "cannot create the output directory /proc/colmo/run"),
+], ids=["seed", "sweep", "interval", "output dir"])
+def test_bad_values_are_one_line_exit_2_and_leave_nothing(tmp_path, overrides, message):
+    line = one_error_line(script("colmo", *overrides, cwd=tmp_path), 2)
+    assert message in line, line
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_spec_whose_environment_fails_is_one_line_with_the_default_tracker(tmp_path):
+    (tmp_path / "broken.py").write_text(SPEC_ENV_RAISES)
+    result = script("colmo", f"task.spec={tmp_path / 'broken.py'}", *TINY, "hydra.run.dir=run", cwd=tmp_path)
+    line = one_error_line(result, 2)
+    assert "the starter policy in" in line and "no such robot" in line, line
+    # The tracker built nothing of the task; its run records the failure.
+    client = MlflowClient(f"sqlite:///{tmp_path / 'mlruns.db'}")
+    (run,) = client.search_runs([client.get_experiment_by_name("pendulum").experiment_id])
+    assert run.info.status == "FAILED"
+
+    verbose = script("colmo", f"task.spec={tmp_path / 'broken.py'}", *TINY, "tracker=none", "hydra.run.dir=run2", "hydra.verbose=true", cwd=tmp_path)
+    assert verbose.returncode != 0 and "Traceback" in verbose.stderr
+
+
+def test_a_policy_file_that_is_a_directory_is_one_line(tmp_path):
+    line = one_error_line(script("colmo-optimize", f"policy_file={tmp_path}", cwd=tmp_path), 2)
+    assert f"policy_file is a directory, not a file: {tmp_path}" in line
+    assert not list(tmp_path.iterdir())
+
+
+def test_an_openai_server_that_does_not_answer_is_one_line_exit_1(tmp_path):
+    with socket.socket() as probe:  # a port nothing listens on: the connection is refused at once
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    result = script("colmo", "llm=openai", f"llm.base_url=http://127.0.0.1:{port}/v1", "tracker=none", *TINY, cwd=tmp_path)
+    line = one_error_line(result, 1)
+    assert f"no OpenAI-compatible server answers at http://127.0.0.1:{port}/v1" in line
+    assert "start one" in line and "llm.base_url" in line
+    assert "best policy" not in result.stdout and "def policy" not in result.stdout  # no search ran

@@ -1,0 +1,155 @@
+"""Faults a run meets, each ending cleanly: what was evaluated stays evaluated, the summary
+agrees with the store, no sample number is skipped or counted twice, and user errors end in
+one line naming the path.
+
+Ctrl-C and SIGTERM (once: the programs in flight finish with their best constants so far;
+twice: they are stored as interrupted and evaluated on resume), a full disk (simulated with a
+file-size limit), a second search into a locked run directory, a resume with other scoring
+settings, empty and corrupt stores, and directories that cannot be written.
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import signal
+import sqlite3
+import subprocess
+from pathlib import Path
+
+import pytest
+from conftest import run_colmo, start_colmo, wait_for
+
+TINY = ("task.episodes=2", "tracker=none", "executor.workers=2", "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false")
+SLOW = ("gfo.budget=200", "llm.batch_size=4")  # programs that tune long enough to be caught in flight
+
+
+def rows(run_dir: Path) -> list[tuple]:
+    """The store's samples (read-only, while a search may be writing)."""
+    path = run_dir / "programs.db"
+    if not path.is_file():
+        return []
+    try:
+        with sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=30) as connection:
+            return connection.execute("SELECT sample, status, cut_short FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
+    except sqlite3.OperationalError:  # the schema is not there yet
+        return []
+
+
+def start(cwd: Path, *overrides: str, **popen) -> subprocess.Popen:
+    return start_colmo("colmo", *overrides, cwd=cwd, **popen)
+
+
+def run_dir_of(cwd: Path) -> Path:
+    return wait_for(lambda: next(iter(cwd.glob("outputs/pendulum/*")), None), what="the run directory")
+
+
+def busy_workers(run_dir: Path) -> bool:
+    """Samples are being tuned: the first generated sample is stored, its batch mates are in
+    flight (each tunes for a while with `SLOW`)."""
+    return bool(rows(run_dir))
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_stop_signal_finishes_the_programs_in_flight_and_loses_nothing(tmp_path, signum):
+    process = start(tmp_path, "search.max_samples=1000", *TINY, *SLOW)
+    run_dir = run_dir_of(tmp_path)
+    wait_for(lambda: busy_workers(run_dir), timeout=600, what="the search to evaluate programs")
+    process.send_signal(signum)
+    _, stderr = process.communicate(timeout=300)
+    assert process.returncode == 130, stderr
+    assert "resume with: colmo " in stderr and f"resume={run_dir}" in stderr
+    stored = rows(run_dir)
+    summary = json.loads((run_dir / "summary.json").read_text())
+    assert summary["stop_reason"] == "interrupted"
+    assert [sample for sample, *_ in stored] == list(range(summary["samples"]))  # every number once, none skipped
+    assert summary["samples"] >= 1 and all(status in ("evaluated", "failed", "duplicate", "unusable") for _, status, _ in stored)
+    assert any(cut_short for *_, cut_short in stored)  # tuning stopped at the next candidate, its best kept
+
+
+def test_a_second_signal_stores_the_programs_in_flight_as_interrupted_and_resume_evaluates_them(tmp_path):
+    process = start(tmp_path, "search.max_samples=8", *TINY, *SLOW)
+    run_dir = run_dir_of(tmp_path)
+    wait_for(lambda: busy_workers(run_dir), timeout=600, what="the search to evaluate programs")
+    process.send_signal(signal.SIGINT)
+    # Signals of one kind do not queue: the second is sent once the first has been handled.
+    for line in process.stderr:
+        if "stopping:" in line:
+            break
+    process.send_signal(signal.SIGINT)
+    process.communicate(timeout=300)
+    assert process.returncode == 130
+    interrupted = [sample for sample, status, _ in rows(run_dir) if status == "interrupted"]
+    assert interrupted, rows(run_dir)
+    summary = json.loads((run_dir / "summary.json").read_text())
+    assert summary["interrupted"] == len(interrupted) and summary["samples"] == len(rows(run_dir))
+
+    result = run_colmo("colmo", "search.max_samples=8", *TINY, "gfo.budget=4", f"resume={run_dir}", cwd=tmp_path)
+    assert result.returncode == 2 and "gfo" in result.stderr.splitlines()[-1]  # other scoring settings: refused
+    result = run_colmo("colmo", "search.max_samples=8", *TINY, *SLOW, f"resume={run_dir}", cwd=tmp_path, timeout=600)
+    assert result.returncode == 0, result.stderr
+    after = rows(run_dir)
+    assert [sample for sample, *_ in after] == list(range(8))
+    assert all(status != "interrupted" for _, status, _ in after)
+
+
+def _limit_file_size(size: int):
+    def apply() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (size, size))
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails (EFBIG) instead of killing
+
+    return apply
+
+
+def test_a_full_disk_ends_the_search_cleanly_with_the_store_intact(tmp_path):
+    overrides = ("search.max_samples=400", "gfo=none", *TINY, "hydra/job_logging=stdout")
+    process = start(tmp_path, *overrides, preexec_fn=_limit_file_size(96 * 1024))
+    stdout, stderr = process.communicate(timeout=600)
+    run_dir = next(tmp_path.glob("outputs/pendulum/*"))
+    assert process.returncode == 1, stderr
+    assert "Traceback" not in stdout + stderr and "resume with: colmo " in stderr
+    assert f"stopped: store failed: cannot write to {run_dir / 'programs.db'}" in stdout
+    with sqlite3.connect(run_dir / "programs.db") as connection:
+        assert connection.execute("PRAGMA integrity_check").fetchone() == ("ok",)
+    stored = rows(run_dir)
+    assert stored and [sample for sample, *_ in stored] == list(range(len(stored)))
+    result = run_colmo("colmo", *overrides[:-1], f"resume={run_dir}", "search.max_samples=" + str(len(stored) + 4), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert [sample for sample, *_ in rows(run_dir)] == list(range(len(stored) + 4))
+
+
+def test_a_second_search_into_a_run_directory_in_use_is_one_line(tmp_path):
+    first = start(tmp_path, "search.max_samples=1000", *TINY, *SLOW)
+    run_dir = run_dir_of(tmp_path)
+    try:
+        wait_for(lambda: busy_workers(run_dir), timeout=600, what="the first search to run")
+        result = run_colmo("colmo", "search.max_samples=1000", *TINY, *SLOW, f"resume={run_dir}", cwd=tmp_path)
+    finally:
+        first.send_signal(signal.SIGINT)
+        first.communicate(timeout=300)
+    assert result.returncode == 2
+    assert result.stderr.strip().splitlines()[-1] == f"colmo: error: the run directory {run_dir} is in use by another colmo search (pid {first.pid})"
+
+
+@pytest.mark.parametrize("content, message", [
+    (b"", "{path} is empty: not a colmo program store"),
+    (b"garbage " * 100, "{path} is not a colmo program store (file is not a database)"),
+])
+def test_empty_or_corrupt_stores_are_one_line_naming_the_file(tmp_path, content, message):
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    (run_dir / "programs.db").write_bytes(content)
+    result = run_colmo("colmo", *TINY, f"resume={run_dir}", cwd=tmp_path)
+    assert result.returncode == 2
+    assert result.stderr.strip() == "colmo: error: " + message.format(path=run_dir / "programs.db")
+
+
+def test_a_run_directory_that_cannot_be_written_is_one_line(tmp_path):
+    """Root ignores directory permissions, so the parent is made unwritable for everyone: it is
+    a file."""
+    blocker = tmp_path / "not_a_directory"
+    blocker.write_text("")
+    result = run_colmo("colmo", *TINY, f"hydra.run.dir={blocker}/run", cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr
+    assert result.stderr.strip().splitlines()[-1].startswith(f"colmo: error: cannot create the output directory {blocker}/run: {blocker} is not a directory")
