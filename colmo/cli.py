@@ -33,9 +33,9 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
 
 from colmo import config
-from colmo.config import CONFIG_MODULE, to_objects
 from colmo.errors import EXIT_RUNTIME, EXIT_USAGE, ConfigError, RunError, one_line
 
+CONFIG_MODULE = "colmo.conf"  # the bundled configs (colmo/conf/)
 # Schemas by the name the YAML options put in their defaults list.
 SCHEMAS: dict[tuple[Optional[str], str], type] = {
     ("task", "schema"): config.TaskConfig,
@@ -53,6 +53,19 @@ SCHEMAS: dict[tuple[Optional[str], str], type] = {
     (None, "optimize_schema"): config.OptimizeConfig,
     (None, "search_schema"): config.SearchConfig,
 }
+
+
+def to_objects(cfg: DictConfig) -> Any:
+    """The composed config as validated dataclasses (the schemas' checks run here); `ConfigError`
+    on a missing or bad value."""
+    missing = sorted(OmegaConf.missing_keys(cfg))
+    if missing:
+        raise ConfigError(f"missing value for {', '.join(missing)}: pass it as an override, e.g. {missing[0]}=...")
+    try:
+        return OmegaConf.to_object(cfg)
+    except Exception as error:
+        cause = error.__cause__ if isinstance(error.__cause__, ConfigError) else error
+        raise ConfigError(one_line(cause)) from None
 
 
 def register_schemas() -> None:

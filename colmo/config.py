@@ -3,7 +3,7 @@
 Each YAML option in `conf/<group>/` is composed over the dataclass of its group and sets only
 what differs from it; the defaults and the documentation of every field live here (a field's
 `metadata["help"]`, which `colmo --help` shows). Ranges and names are checked in
-`__post_init__`, which runs when the composed config is turned into objects (`to_objects`),
+`__post_init__`, which runs when the composed config is turned into objects (`colmo.cli`),
 so a bad value is one `ConfigError` line. Groups whose options differ in kind have one schema
 per kind (`gfo=bo` has a sampler, `executor=ray` an address, `llm=openai` a server).
 `colmo.cli` registers the schemas with Hydra and runs the apps.
@@ -15,11 +15,9 @@ import os
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
-from omegaconf import MISSING, DictConfig, OmegaConf
+from omegaconf import MISSING
 
-from colmo.errors import ConfigError, one_line
-
-CONFIG_MODULE = "colmo.conf"
+from colmo.errors import ConfigError
 
 
 def _require(condition: bool, message: str) -> None:
@@ -397,15 +395,3 @@ class OptimizeConfig:
 
     def __post_init__(self) -> None:
         _require(self.seed >= 0, f"seed must be >= 0, got {self.seed}")
-
-
-def to_objects(cfg: DictConfig) -> Any:
-    """The composed config as validated dataclasses; `ConfigError` on a missing or bad value."""
-    missing = sorted(OmegaConf.missing_keys(cfg))
-    if missing:
-        raise ConfigError(f"missing value for {', '.join(missing)}: pass it as an override, e.g. {missing[0]}=...")
-    try:
-        return OmegaConf.to_object(cfg)
-    except Exception as error:
-        cause = error.__cause__ if isinstance(error.__cause__, ConfigError) else error
-        raise ConfigError(one_line(cause)) from None

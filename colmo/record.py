@@ -1,6 +1,6 @@
 """What a search records: one immutable `SampleRecord` per generated sample, built once its
 outcome is known, and the typed progress reports made from them (`BatchReport` after every
-batch, `Summary` at the end).
+batch, `Summary` at the end), and who receives them (`SearchObserver`).
 
 A sample's status is one of:
 - `evaluated`: the program ran; `score` is the referee's mean return over the training episodes;
@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import asdict, dataclass, field
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any, Optional, Protocol
 
 if TYPE_CHECKING:
     from colmo.generate.base import Generation
@@ -218,3 +218,11 @@ class Counters:
             unusable_outputs=self.unusable, interrupted=self.interrupted, evaluations=self.evaluations, steps=self.steps,
             valid_program_rate=self.valid_program_rate, duplicate_rate=self.duplicate_rate, tokens_per_second=self.tokens_per_second,
         )
+
+
+class SearchObserver(Protocol):
+    """Receives a search's reports (a tracker, a progress display)."""
+
+    def on_batch(self, report: BatchReport, records: list[SampleRecord]) -> None: ...
+
+    def on_finish(self, summary: Summary) -> None: ...

@@ -26,7 +26,7 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Optional, Protocol
+from typing import Optional
 
 import numpy as np
 
@@ -43,7 +43,7 @@ from colmo.optimize import CandidateEvaluator, optimize_program
 from colmo.optimize.tune import calibrated
 from colmo.program import ParametricProgram, parametrize
 from colmo.prompt import build_prompt
-from colmo.record import DUPLICATE, FAILED, FINISHED, INTERRUPTED, UNUSABLE, BatchReport, Counters, Sample, SampleRecord, Summary
+from colmo.record import DUPLICATE, FAILED, FINISHED, INTERRUPTED, UNUSABLE, BatchReport, Counters, Sample, SampleRecord, SearchObserver, Summary
 from colmo.sandbox.check import ForbiddenProgram
 from colmo.signals import stop_signals
 from colmo.spec import Spec, load_task_spec
@@ -55,14 +55,6 @@ log = logging.getLogger("colmo.search")
 STARTER_SAMPLE = -1
 _POLL_S = 0.2  # how often waits check the deadline and interruptions
 _FINISH_GRACE_S = 5.0
-
-
-class SearchObserver(Protocol):
-    """Receives progress (a tracker, a progress display)."""
-
-    def on_batch(self, report: BatchReport, records: list[SampleRecord]) -> None: ...
-
-    def on_finish(self, summary: Summary) -> None: ...
 
 
 @dataclass
@@ -252,18 +244,14 @@ class Search:
 
     def _submit(self, sample: Sample) -> concurrent.futures.Future:
         """Read the sample's program and start its evaluation; a future of its record."""
-        done: concurrent.futures.Future = concurrent.futures.Future()
         try:
             program = read_program(sample.generation.text, self.spec.allowed_imports, sample.generation.prefix, self.cfg.database.max_nodes)
         except Unusable as error:
-            done.set_result(self._stored(SampleRecord.of(sample, UNUSABLE, failure=f"unusable output: {error}")))
-            return done
+            return self._settled(SampleRecord.of(sample, UNUSABLE, failure=f"unusable output: {error}"))
         except ForbiddenProgram as error:
-            done.set_result(self._stored(SampleRecord.of(sample, FAILED, failure=str(error))))
-            return done
+            return self._settled(SampleRecord.of(sample, FAILED, failure=str(error)))
         if self.database.is_known(program.key):
-            done.set_result(self._stored(SampleRecord.of(sample, DUPLICATE, program)))
-            return done
+            return self._settled(SampleRecord.of(sample, DUPLICATE, program))
         # Known from now on, so a batch generated before this one is integrated skips it too.
         self.database.mark_seen(program.key)
         return self.program_threads.submit(self._evaluate, sample, program)
@@ -289,6 +277,12 @@ class Search:
     def _stored(self, record: SampleRecord) -> SampleRecord:
         self.store.add(record)
         return record
+
+    def _settled(self, record: SampleRecord) -> concurrent.futures.Future:
+        """A sample settled without evaluation, stored, as a completed future of its record."""
+        done: concurrent.futures.Future = concurrent.futures.Future()
+        done.set_result(self._stored(record))
+        return done
 
     # -- integration ----------------------------------------------------------------------------
 

@@ -121,10 +121,11 @@ class EpisodeTrace:
         return json.dumps(self.to_dict(), allow_nan=False, separators=(",", ":"))
 
     @classmethod
-    def from_json(cls, text: str | bytes) -> EpisodeTrace:
-        """Parse and validate a trace stored or sent as JSON."""
-        if len(text) > MAX_JSON_CHARS:
-            raise TraceError(f"invalid episode trace: {len(text)} characters, more than {MAX_JSON_CHARS}")
+    def from_json(cls, text: str | bytes, max_chars: int = MAX_JSON_CHARS) -> EpisodeTrace:
+        """Parse and validate a trace stored or sent as JSON, refusing one over `max_chars`
+        before parsing it."""
+        if len(text) > max_chars:
+            raise TraceError(f"invalid episode trace: {len(text)} characters, more than {max_chars}")
         try:
             data = json.loads(text)
         except (ValueError, RecursionError) as error:  # JSONDecodeError and UnicodeDecodeError are ValueErrors

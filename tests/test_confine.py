@@ -290,7 +290,6 @@ def _header_numbers(path: Path) -> dict[str, int]:
     ("machine", "header"),
     [
         ("x86_64", Path("/usr/include/x86_64-linux-gnu/asm/unistd_64.h")),
-        ("x86_64", Path("/usr/include/asm/unistd_64.h")),
         ("aarch64", Path("/usr/include/asm-generic/unistd.h")),
     ],
 )

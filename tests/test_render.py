@@ -284,11 +284,10 @@ def test_malformed_traces_are_refused(pendulum_trace):
             EpisodeTrace.from_json(bad)
 
 
-def test_oversized_json_is_refused_before_parsing(pendulum_trace, monkeypatch):
+def test_oversized_json_is_refused_before_parsing(pendulum_trace):
     text = pendulum_trace.to_json()
-    monkeypatch.setattr(trace_module, "MAX_JSON_CHARS", len(text) - 1)
     with pytest.raises(TraceError, match="characters"):
-        EpisodeTrace.from_json(text)
+        EpisodeTrace.from_json(text, max_chars=len(text) - 1)
 
 
 def test_video_refuses_a_trace_of_another_model(cheetah, pendulum_trace, tmp_path):

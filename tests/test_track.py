@@ -22,7 +22,6 @@ from mlflow import MlflowClient
 from mlflow.exceptions import MlflowException
 from omegaconf import OmegaConf
 
-from colmo import track
 from colmo.record import BatchReport, SampleRecord, Summary
 from colmo.track import (
     CLASSIC_ML,
@@ -320,9 +319,8 @@ def _tracked(uri: str) -> TrackedRun:
 def test_an_interrupted_search_ends_killed_with_its_programs_table_rewritten_in_place(store, tmp_path, monkeypatch):
     uri = store
     monkeypatch.setenv("MLFLOW_TRACKING_URI", uri)  # for load_table, as above
-    monkeypatch.setattr(track, "TABLE_EVERY_S", 0.0)  # rewrite the table after every batch
     run = _tracked(uri)
-    tracker = MlflowTracker(run)
+    tracker = MlflowTracker(run, table_every_s=0.0)  # rewrite the table after every batch
     for batch, score in enumerate([1.0, 3.0]):
         tracker.on_batch(_report(batch, score), [_record(batch, score)])
         table = run.client.load_table(run.experiment_id, "programs.json", run_ids=[run.run_id])
@@ -347,9 +345,8 @@ def test_an_interrupted_search_ends_killed_with_its_programs_table_rewritten_in_
 def test_the_table_is_rewritten_at_most_every_table_every_s(store, tmp_path, monkeypatch):
     uri = store
     monkeypatch.setenv("MLFLOW_TRACKING_URI", uri)
-    monkeypatch.setattr(track, "TABLE_EVERY_S", 3600.0)
     run = _tracked(uri)
-    tracker = MlflowTracker(run)
+    tracker = MlflowTracker(run, table_every_s=3600.0)
     for batch in range(3):
         tracker.on_batch(_report(batch, 1.0), [_record(batch, 1.0)])
     # Written at the first batch only (then not for an hour); the end writes every row.

@@ -1,0 +1,180 @@
+"""Which runs a report counts, read back from MLflow: every FINISHED search run of the
+experiments (sweep parents and `colmo-optimize` runs are not searches), with its best-so-far
+history against the chosen axis; runs that did not finish are left out with the reason. Runs
+are grouped by task and variant: the GFO method, its budget when tuning, and any other setting
+that differs between the task's runs (`database.num_islands=5`); settings that do not change
+results (tracker, executor, display) are ignored. A run repeated with the same variant and seed
+is a repeat: the latest counts, and the report names the older ones."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional, Sequence
+
+from mlflow import MlflowClient
+from mlflow.entities import Run
+
+from colmo.optimize.methods import METHODS
+from colmo.track import SWEEP_TAG
+
+NO_GFO = "no GFO"
+# x axes: the metric logged at each step (samples is the step itself) and its label.
+AXES = {
+    "samples": (None, "programs sampled"),
+    "evaluations": ("evaluations", "candidate evaluations (each over task.episodes episodes)"),
+    "seconds": ("seconds", "seconds of search (wall clock)"),
+}
+# Settings that do not change what a search finds: not part of a variant.
+_IGNORED = ("tracker.", "executor.", "search.progress", "search.queue_size", "evaluation.render", "resume", "spec.")
+_VARIANT_BASE = ("task.name", "gfo.method", "gfo.budget", "seed")
+
+
+@dataclass
+class RunCurves:
+    """One finished search as the report needs it: its best-so-far curve against `x`."""
+
+    run: Run
+    task: str
+    method: str
+    budget: int
+    seed: int
+    target: Optional[float]
+    variant: str = ""
+    steps: list[int] = field(default_factory=list)  # samples so far at each batch
+    x: list[float] = field(default_factory=list)  # the chosen axis at each batch
+    best: list[float] = field(default_factory=list)
+    per_island: list[list[float]] = field(default_factory=list)
+
+    @property
+    def order(self) -> tuple:
+        """No GFO first, then the GFO methods in config order, by budget; then seeds."""
+        return (self.task, ("none", *METHODS).index(self.method), self.budget if self.method != "none" else 0, self.variant, self.seed)
+
+    @property
+    def final(self) -> float:
+        return self.best[-1]
+
+    @property
+    def heldout(self) -> Optional[float]:
+        return self.run.data.metrics.get("best_heldout_score")
+
+    @property
+    def samples_to_target(self) -> Optional[int]:
+        """Programs sampled when the best score first reached the target (batch resolution)."""
+        if self.target is None:
+            return None
+        return next((step for step, score in zip(self.steps, self.best) if score >= self.target), None)
+
+
+@dataclass
+class Variant:
+    name: str
+    runs: list[RunCurves] = field(default_factory=list)
+
+    @property
+    def gfo(self) -> bool:
+        return self.runs[0].method != "none"
+
+
+@dataclass
+class Reading:
+    """What was read from MLflow: the runs that count, and those left out with the reason."""
+
+    curves: list[RunCurves]
+    left_out: list[tuple[Run, str]]
+
+
+
+def _search_runs(client: MlflowClient, experiment_ids: list[str]) -> list[Run]:
+    """Every search run (not sweep parents, not colmo-optimize runs), newest first."""
+    runs, token = [], None
+    while True:
+        page = client.search_runs(experiment_ids, "", max_results=1000, order_by=["attributes.start_time DESC"], page_token=token)
+        runs += [run for run in page if SWEEP_TAG not in run.data.tags and run.data.tags.get("colmo.command", "search") == "search"]
+        token = page.token
+        if not token:
+            return runs
+
+
+def _history(client: MlflowClient, run_id: str, key: str) -> dict[int, float]:
+    """The metric's value at each step (the last one logged there)."""
+    return {m.step: m.value for m in sorted(client.get_metric_history(run_id, key), key=lambda m: (m.step, m.timestamp))}
+
+
+def _setting_key(params: dict[str, str]) -> dict[str, str]:
+    return {key: value for key, value in params.items() if not key.startswith(_IGNORED)}
+
+
+def read_runs(client: MlflowClient, experiments: Sequence[str], axis: str = "samples") -> Reading:
+    """The finished search runs of `experiments` with their best-so-far histories against
+    `axis`; the latest of each repeat (same settings and seed) counts, the others are left out
+    with the reason, and so are runs that did not finish or have no curve."""
+    ids = []
+    for name in experiments:
+        experiment = client.get_experiment_by_name(name)
+        if experiment is None:
+            raise ValueError(f"no MLflow experiment named {name!r} at {client.tracking_uri}")
+        ids.append(experiment.experiment_id)
+    metric, _ = AXES[axis]
+    curves: list[RunCurves] = []
+    left_out: list[tuple[Run, str]] = []
+    counted: dict[tuple, str] = {}  # settings -> run name of the latest run with them
+    for run in _search_runs(client, ids):
+        params, run_id = run.data.params, run.info.run_id
+        if run.info.status != "FINISHED":
+            left_out.append((run, f"status {run.info.status}"))
+            continue
+        settings = tuple(sorted(_setting_key(params).items()))
+        if settings in counted:
+            left_out.append((run, f"repeat of `{counted[settings]}` (same settings and seed; the latest counts)"))
+            continue
+        best = _history(client, run_id, "best_score")
+        if not best:
+            left_out.append((run, "no batch finished: no curve"))
+            continue
+        xs = {step: float(step) for step in best} if metric is None else _history(client, run_id, metric)
+        if not set(best) <= set(xs):
+            left_out.append((run, f"no `{metric}` metric at every batch (logged by newer colmo): not on this axis"))
+            continue
+        counted[settings] = run.info.run_name
+        target = params.get("task.target_score", "null")
+        curve = RunCurves(
+            run=run, task=params["task.name"], method=params["gfo.method"], budget=int(params["gfo.budget"]),
+            seed=int(params["seed"]), target=None if target == "null" else float(target),
+        )
+        curve.steps = sorted(best)
+        curve.x = [xs[step] for step in curve.steps]
+        curve.best = [best[step] for step in curve.steps]
+        islands = sorted((k for k in run.data.metrics if k.startswith("best_score_island_")), key=lambda k: int(k.rsplit("_", 1)[1]))
+        for key in islands:
+            history = _history(client, run_id, key)
+            curve.per_island.append([history.get(step, float("nan")) for step in curve.steps])
+        curves.append(curve)
+    _name_variants(curves)
+    return Reading(curves, left_out)
+
+
+def _name_variants(curves: list[RunCurves]) -> None:
+    """Each run's variant: the GFO method (and budget when tuning), and every other setting
+    that differs between the runs of its task."""
+    by_task: dict[str, list[RunCurves]] = {}
+    for curve in curves:
+        by_task.setdefault(curve.task, []).append(curve)
+    for runs in by_task.values():
+        settings = [_setting_key(curve.run.data.params) for curve in runs]
+        # Keys only some runs have belong to one option's schema (gfo.sampler of gfo=bo): the
+        # option itself (gfo.method, llm.name) already tells those runs apart.
+        shared = set.intersection(*(set(s) for s in settings)) - set(_VARIANT_BASE)
+        differing = sorted(key for key in shared if len({s[key] for s in settings}) > 1)
+        for curve, setting in zip(runs, settings):
+            base = NO_GFO if curve.method == "none" else f"{curve.method}, budget {curve.budget}"
+            extra = [f"{key}={setting[key]}" for key in differing if not (curve.method == "none" and key.startswith("gfo."))]
+            curve.variant = ", ".join([base, *extra])
+
+
+def group(curves: list[RunCurves]) -> dict[str, list[Variant]]:
+    """Runs by task, then by variant."""
+    tasks: dict[str, dict[str, Variant]] = {}
+    for curve in sorted(curves, key=lambda c: c.order):
+        tasks.setdefault(curve.task, {}).setdefault(curve.variant, Variant(curve.variant)).runs.append(curve)
+    return {task: list(variants.values()) for task, variants in tasks.items()}

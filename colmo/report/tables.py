@@ -1,0 +1,156 @@
+"""The report's Markdown: Table I (the paper's, with held-out scores beside training ones),
+one line per run, the runs left out, and each variant's best policy."""
+
+from __future__ import annotations
+
+import statistics
+import tempfile
+from pathlib import Path
+from typing import Optional, Sequence
+
+from mlflow import MlflowClient
+from mlflow.entities import Run
+
+from colmo.report.runs import Variant
+from colmo.store import BEST_POLICY_FILE
+
+
+def mean_std(values: Sequence[float], digits: int = 1) -> str:
+    """`mean ± sample std`; the mean alone for one value."""
+    if len(values) == 1:
+        return f"{values[0]:.{digits}f}"
+    return f"{statistics.mean(values):.{digits}f} ± {statistics.stdev(values):.{digits}f}"
+
+
+def reward_cell(variant: Optional[Variant]) -> str:
+    return mean_std([run.final for run in variant.runs]) if variant else "—"
+
+
+def heldout_cell(variant: Optional[Variant]) -> str:
+    """Mean ± std of the best programs' held-out scores, over the seeds that have one."""
+    if variant is None:
+        return "—"
+    scores = [run.heldout for run in variant.runs if run.heldout is not None]
+    if not scores:
+        return "—"
+    return mean_std(scores) + ("" if len(scores) == len(variant.runs) else f" ({len(scores)}/{len(variant.runs)} seeds)")
+
+
+def target_cell(variant: Optional[Variant]) -> str:
+    """Mean ± std over the seeds that reached the target, and how many did."""
+    if variant is None or variant.runs[0].target is None:
+        return "—"
+    reached = [run.samples_to_target for run in variant.runs if run.samples_to_target is not None]
+    count = f"({len(reached)}/{len(variant.runs)} seeds)"
+    return f"{mean_std(reached, 0)} {count}" if reached else f"not reached {count}"
+
+
+def _bold_better(cells: list[str], variants: Sequence[Optional[Variant]], value) -> list[str]:
+    """Bold the better mean of the two, as the paper does."""
+    values = ([value(run) for run in variant.runs if value(run) is not None] if variant else [] for variant in variants)
+    means = [statistics.mean(v) if v else None for v in values]
+    if None in means:
+        return cells
+    better = means.index(max(means))
+    return [f"**{cell}**" if index == better else cell for index, cell in enumerate(cells)]
+
+
+def dims(variants: list[Variant]) -> tuple[str, str]:
+    params = next((run.run.data.params for v in variants for run in v.runs if "spec.observation_size" in run.run.data.params), {})
+    return params.get("spec.observation_size", "—"), params.get("spec.action_size", "—")
+
+
+def table_one(tasks: dict[str, list[Variant]]) -> list[str]:
+    """Table I: one row per task and GFO variant, against the task's no-GFO runs (the first
+    no-GFO variant, when settings other than GFO differ too)."""
+    lines = [
+        "| Task | State dim | Action dim | GFO | Reward, no GFO | Reward, GFO | Held-out, no GFO | Held-out, GFO "
+        "| Target | Samples to target, no GFO | Samples to target, GFO |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for task, variants in tasks.items():
+        baseline = next((v for v in variants if not v.gfo), None)
+        tuned = [v for v in variants if v.gfo] or [None]
+        observation_size, action_size = dims(variants)
+        target = variants[0].runs[0].target
+        for variant in tuned:
+            pair = (baseline, variant)
+            rewards = _bold_better([reward_cell(v) for v in pair], pair, lambda run: run.final)
+            heldouts = _bold_better([heldout_cell(v) for v in pair], pair, lambda run: run.heldout)
+            lines.append(
+                f"| {task} | {observation_size} | {action_size} | {variant.name if variant else '—'} | "
+                f"{' | '.join(rewards)} | {' | '.join(heldouts)} | "
+                f"{'—' if target is None else f'{target:g}'} | {target_cell(baseline)} | {target_cell(variant)} |"
+            )
+    return lines
+
+
+def runs_table(tasks: dict[str, list[Variant]]) -> list[str]:
+    lines = [
+        "| Run | Variant | Seed | Best score | Held-out | Samples | Evaluations | Samples to target | Seconds | Overrides |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for variants in tasks.values():
+        for variant in variants:
+            for run in variant.runs:
+                info, metrics = run.run.info, run.run.data.metrics
+                reached = run.samples_to_target
+                evaluations = metrics.get("evaluations")
+                seconds = metrics.get("seconds", (info.end_time - info.start_time) / 1000)
+                lines.append(
+                    f"| {info.run_name} | {variant.name} | {run.seed} | {run.final:.1f} | "
+                    f"{'—' if run.heldout is None else f'{run.heldout:.1f}'} | {run.steps[-1]} | "
+                    f"{'—' if evaluations is None else f'{evaluations:.0f}'} | {'—' if reached is None else reached} | "
+                    f"{seconds:.0f} | `{run.run.data.tags.get('overrides', '')}` |"
+                )
+    return lines
+
+
+def generation_table(tasks: dict[str, list[Variant]]) -> list[str]:
+    """Per run, where the samples and the time went: the share of samples that were valid
+    programs (of those not skipped as duplicates) and that were duplicates, the generator's
+    tokens per second, and how busy the generator and the evaluation workers were."""
+    lines = [
+        "| Run | Variant | Valid programs | Duplicates | Tokens/s | Generator busy | Evaluator busy |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    percent = lambda value: "—" if value is None else f"{100 * value:.0f}%"  # noqa: E731
+    for variants in tasks.values():
+        for variant in variants:
+            for run in variant.runs:
+                metrics = run.run.data.metrics
+                tokens = metrics.get("tokens_per_second")
+                lines.append(
+                    f"| {run.run.info.run_name} | {variant.name} | {percent(metrics.get('valid_program_rate'))} | "
+                    f"{percent(metrics.get('duplicate_rate'))} | {'—' if not tokens else f'{tokens:.1f}'} | "
+                    f"{percent(metrics.get('generator_busy'))} | {percent(metrics.get('evaluator_busy'))} |"
+                )
+    return lines
+
+
+def left_out_lines(left_out: list[tuple[Run, str]]) -> list[str]:
+    if not left_out:
+        return ["None: every search run of the experiment(s) counts."]
+    return [f"- `{run.info.run_name}` ({run.info.run_id[:8]}): {reason}" for run, reason in left_out]
+
+
+def best_policies(client: MlflowClient, tasks: dict[str, list[Variant]]) -> list[str]:
+    """Each variant's best run's `best_policy.py` artifact, as a code block."""
+    lines = []
+    with tempfile.TemporaryDirectory() as scratch:
+        for task, variants in tasks.items():
+            for variant in variants:
+                best = max(variant.runs, key=lambda run: run.final)
+                path = client.download_artifacts(best.run.info.run_id, BEST_POLICY_FILE, scratch)
+                code = Path(path).read_text().rstrip()
+                lines += [
+                    f"### {task}, {variant.name}",
+                    "",
+                    f"Best of {len(variant.runs)} seed(s): run `{best.run.info.run_name}`, score {best.final:.1f}.",
+                    "",
+                    "```python",
+                    code,
+                    "```",
+                    "",
+                ]
+    return lines

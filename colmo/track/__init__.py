@@ -1,0 +1,31 @@
+"""Tracking runs in MLflow: one MLflow run per search or tuning (per Hydra job), a parent run per
+`-m` sweep, with every program and score.
+
+- `store`: where runs go, opening the store safely from jobs that start together, experiments
+  and colmo's view of their run list in the UI;
+- `sweep`: the parent run of a sweep, and its children's best scores;
+- `programs`: every sample as a row of the table `programs.json` and of the page `programs.html`;
+- `runs`: a job's run, what a search's run holds (`MlflowTracker`, the search's observer), and
+  a `colmo-optimize` job's run.
+"""
+
+from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE
+from colmo.track.runs import PLOT_FILE, MlflowTracker, TrackedRun, draw_best_so_far, flatten, make_tracker, start_run, track_optimize
+from colmo.track.store import (
+    CLASSIC_ML,
+    EXPERIMENT_KIND_TAG,
+    VIEW_TAG,
+    connect,
+    default_tracking_uri,
+    open_experiment,
+    retry_locked,
+    sqlite_path,
+    ui_path,
+)
+from colmo.track.sweep import SWEEP_TAG
+
+__all__ = [
+    "CLASSIC_ML", "EXPERIMENT_KIND_TAG", "PLOT_FILE", "PROGRAM_COLUMNS", "PROGRAMS_PAGE", "PROGRAMS_TABLE", "SWEEP_TAG",
+    "VIEW_TAG", "MlflowTracker", "TrackedRun", "connect", "default_tracking_uri", "draw_best_so_far", "flatten",
+    "make_tracker", "open_experiment", "retry_locked", "sqlite_path", "start_run", "track_optimize", "ui_path",
+]

@@ -1,0 +1,63 @@
+"""MLflow parent runs of Hydra sweeps.
+
+Every job of a `-m` sweep is a child run (tag `mlflow.parentRunId`) of one parent run
+per sweep and experiment, named `<experiment>-sweep-<HHMMSS>`. Whichever job comes first creates
+the parent; the others find it by its tag `colmo.sweep` (a hash of the absolute
+`hydra.sweep.dir`), all under an exclusive file lock in the sweep directory, so this holds for
+any launcher (basic, joblib, submitit) and any tracking store. The parent holds the sweep's
+overrides (from Hydra's `multirun.yaml`) and, after each job, the best `best_score` and
+`best_heldout_score` over its children and their count (`runs`); its status is RUNNING while a
+child runs, else FAILED or KILLED if a child did, else FINISHED (between two jobs of the basic
+launcher it is briefly FINISHED).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+from mlflow import MlflowClient
+from mlflow.utils.mlflow_tags import MLFLOW_PARENT_RUN_ID
+
+from colmo.track.store import FAILED, FINISHED, KILLED, RUNNING, file_lock, log_metrics, retry_locked
+
+SWEEP_TAG = "colmo.sweep"
+SWEEP_LOCK = ".mlflow_parent.lock"
+
+
+def sweep_parent(client: MlflowClient, experiment_id: str, sweep_dir: Path, name: str, tags: dict[str, str]) -> str:
+    """The id of the parent run of the sweep writing into `sweep_dir`, in `experiment_id`: made
+    by the first job that asks, found by the others (under a lock in the sweep directory)."""
+    sweep_id = hashlib.sha1(str(sweep_dir).encode()).hexdigest()[:16]
+    with file_lock(sweep_dir / SWEEP_LOCK):
+        found = retry_locked(client.search_runs, [experiment_id], f"tags.`{SWEEP_TAG}` = '{sweep_id}'", max_results=1)
+        if found:
+            parent = found[0].info
+            if parent.status != RUNNING:  # a job of the basic launcher after the one before ended
+                retry_locked(client.update_run, parent.run_id, status=RUNNING)
+            return parent.run_id
+        tags = {**tags, SWEEP_TAG: sweep_id, "colmo.sweep_dir": str(sweep_dir)}
+        multirun = sweep_dir / "multirun.yaml"  # written by Hydra's basic sweeper before any job
+        if multirun.is_file():
+            from omegaconf import OmegaConf
+
+            tags["overrides"] = " ".join(OmegaConf.load(multirun).hydra.overrides.task)
+        run_id = retry_locked(client.create_run, experiment_id, tags=tags, run_name=name).info.run_id
+        if multirun.is_file():
+            client.log_artifact(run_id, str(multirun), "hydra")
+        return run_id
+
+
+def update_parent(client: MlflowClient, experiment_id: str, parent_id: str, sweep_dir: Path) -> None:
+    """The parent's metrics and status from its children's, after a child ended (under the
+    sweep's lock, so that a job attaching meanwhile is seen)."""
+    with file_lock(sweep_dir / SWEEP_LOCK):
+        children = retry_locked(client.search_runs, [experiment_id], f"tags.`{MLFLOW_PARENT_RUN_ID}` = '{parent_id}'", max_results=10000)
+        statuses = [child.info.status for child in children]
+        best = lambda key: max((c.data.metrics[key] for c in children if key in c.data.metrics), default=None)  # noqa: E731
+        values = {"best_score": best("best_score"), "best_heldout_score": best("best_heldout_score"), "runs": len(children)}
+        log_metrics(client, parent_id, values, len(children) - statuses.count(RUNNING))
+        if RUNNING in statuses:
+            return
+        status = FAILED if FAILED in statuses else KILLED if KILLED in statuses else FINISHED
+        retry_locked(client.set_terminated, parent_id, status)
