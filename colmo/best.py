@@ -59,19 +59,29 @@ def finish(cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator
     best = BestPrograms()
     top = top_records(store, cfg.evaluation.top)
     heldout = heldout_evaluator(evaluator, cfg.seed, cfg.evaluation.episodes)
+    best_took = 0.0  # seconds the best program's held-out score took: what simplifying costs per measurement
     for record in top:
-        if _left(until) <= 0:
+        limit = min(_left(until), heldout.referee_timeout_s)
+        if limit <= 0:
             log.warning("no time left for %d held-out scores (search.max_seconds)", len(top) - len(best.heldout))
             break
-        evaluation = heldout_score(executor, heldout, record.skeleton, record.params, timeout_s=min(_left(until), heldout.referee_timeout_s))
+        started = time.monotonic()
+        evaluation = heldout_score(executor, heldout, record.skeleton, record.params, timeout_s=limit)
         if evaluation.failure == CANCELLED:  # the search is stopping at once
             return best
+        if evaluation.failure and limit < heldout.referee_timeout_s and _left(until) <= 0:  # cut by the time limit, not failed
+            log.warning("no time left for %d held-out scores (search.max_seconds)", len(top) - len(best.heldout))
+            break
+        best_took = best_took or time.monotonic() - started
         score: Optional[float] = None if evaluation.failure else evaluation.score
         store.set_heldout(record.sample, score)
         best.heldout.append({"sample": record.sample, "key": record.key, "score": record.score, "heldout_score": score, "heldout_failure": evaluation.failure})
         shown = "failed" if score is None else f"{score:.2f}"
         log.info("sample %d: training score %.2f, held-out %s over %d episodes", record.sample, record.score, shown, len(heldout.seeds))
-    if top and cfg.evaluation.simplify:
+    # Simplifying first measures the best program on the training and the held-out episodes.
+    if top and cfg.evaluation.simplify and (not best.heldout or _left(until) < 2 * best_took):
+        log.warning("no time left to simplify the best policy (search.max_seconds)")
+    elif top and cfg.evaluation.simplify:
         best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, until)
     if top and cfg.evaluation.render and _left(until) < _RENDER_SECONDS:
         log.warning("no time left for the video and plot of the best policy (search.max_seconds)")

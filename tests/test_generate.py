@@ -587,7 +587,7 @@ def gguf(tmp_path):
 
 
 def test_llamacpp_loads_the_model_once_and_samples_the_batch_with_fresh_seeds(fake_llama_cpp, gguf):
-    cfg = LlamaCppConfig(model_path=gguf, batch_size=3, temperature=0.8, top_p=0.95, max_tokens=300, n_ctx=2048, n_threads=2)
+    cfg = LlamaCppConfig(model_path=gguf, prompt_format="chat", batch_size=3, temperature=0.8, top_p=0.95, max_tokens=300, n_ctx=2048, n_threads=2)
     generator = make_generator(cfg, seed=0)
     generations = generator.generate(make_prompt(STARTER), 3) + generator.generate(make_prompt(STARTER), 2)
     generator.close()
@@ -604,7 +604,7 @@ def test_llamacpp_loads_the_model_once_and_samples_the_batch_with_fresh_seeds(fa
 
 
 def test_llamacpp_completion_form_continues_the_prompt_text(fake_llama_cpp, gguf):
-    generator = make_generator(LlamaCppConfig(model_path=gguf, prompt_format="completion"), seed=0)
+    generator = make_generator(LlamaCppConfig(model_path=gguf), seed=0)  # the default form
     [generation] = generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 1)
     [call] = FakeLlama.instances[0].calls
     assert call["prompt"] == PROMPT_TEXT and call["stop"] == list(COMPLETION_STOP)
@@ -630,7 +630,7 @@ def test_llamacpp_a_prompt_longer_than_the_context_is_a_generator_error(fake_lla
         raise ValueError("Requested tokens (5000) exceed context window of 4096")
 
     monkeypatch.setattr(FakeLlama, "create_chat_completion", refuse)
-    generator = make_generator(LlamaCppConfig(model_path=gguf), seed=0)
+    generator = make_generator(LlamaCppConfig(model_path=gguf, prompt_format="chat"), seed=0)
     with pytest.raises(GeneratorError, match=r"llama.cpp refused the prompt \(ValueError: Requested tokens .*\); raise llm.n_ctx"):
         generator.generate(make_prompt(STARTER), 1)
 
