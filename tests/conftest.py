@@ -100,9 +100,11 @@ class FakeOpenAIServer:
                     self.reply(200, b"{not json", content_type="application/json")
                 elif behaviour == "html":
                     self.reply(200, b"<html>proxy error</html>", content_type="text/html")
-                else:
+                elif self.path.endswith("/chat/completions"):
                     content = "" if behaviour == "empty" else None
                     self.reply(200, completion(body, n, content))
+                else:  # /v1/completions: the body of a policy, as a code model continuing the prompt text writes it
+                    self.reply(200, text_completion(body, n))
 
             def reply(self, status, payload, content_type="application/json"):
                 data = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
@@ -120,6 +122,14 @@ class FakeOpenAIServer:
     def close(self) -> None:
         self._server.shutdown()
         self._server.server_close()
+
+
+def text_completion(body: dict, n: int) -> dict:
+    choices = [{"index": i, "text": f"    return {i}.0 * obs[0]\n", "finish_reason": "stop", "logprobs": None} for i in range(n)]
+    return {
+        "id": "cmpl-test", "object": "text_completion", "created": int(time.time()), "model": body["model"],
+        "choices": choices, "usage": {"prompt_tokens": 30, "completion_tokens": 4 * n, "total_tokens": 30 + 4 * n},
+    }
 
 
 def completion(body: dict, n: int, content: str | None) -> dict:

@@ -5,7 +5,6 @@ through fake `vllm` and `llama_cpp` modules (tests/test_llm.py runs a real model
 from __future__ import annotations
 
 import ast
-import json
 import logging
 import re
 import socket
@@ -13,7 +12,6 @@ import sys
 import threading
 import time
 import types
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import numpy as np
 import pytest
@@ -387,53 +385,11 @@ def test_base_url_on_the_command_line_as_one_url_or_a_list(tmp_path, server, bas
     assert server.requests and all(r["path"] == "/v1/chat/completions" for r in server.requests)
 
 
-class CompletionsServer:
-    """A local server answering `/v1/completions` with the body of a policy, as a code model
-    continuing the prompt text would; `n` is honoured."""
-
-    def __init__(self):
-        self.requests: list[dict] = []
-        owner = self
-
-        class Handler(BaseHTTPRequestHandler):
-            def log_message(self, *args):
-                pass
-
-            def do_POST(self):
-                body = json.loads(self.rfile.read(int(self.headers["Content-Length"])))
-                owner.requests.append({"path": self.path, "body": body})
-                choices = [
-                    {"index": i, "text": f"    return {i}.0 * obs[0]\n", "finish_reason": "stop", "logprobs": None}
-                    for i in range(body.get("n", 1))
-                ]
-                data = json.dumps({
-                    "id": "cmpl-test", "object": "text_completion", "created": int(time.time()), "model": body["model"],
-                    "choices": choices, "usage": {"prompt_tokens": 30, "completion_tokens": 4 * len(choices), "total_tokens": 0},
-                }).encode()
-                self.send_response(200)
-                self.send_header("Content-Type", "application/json")
-                self.send_header("Content-Length", str(len(data)))
-                self.end_headers()
-                self.wfile.write(data)
-
-        self._server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
-        threading.Thread(target=self._server.serve_forever, kwargs={"poll_interval": 0.01}, daemon=True).start()
-        self.url = f"http://127.0.0.1:{self._server.server_address[1]}/v1"
-
-    def close(self) -> None:
-        self._server.shutdown()
-        self._server.server_close()
-
-
-def test_openai_completion_form_continues_the_prompt_text():
-    fake = CompletionsServer()
-    try:
-        generator = make_generator(openai_config(fake.url, prompt_format="completion"), seed=0)
-        generations = generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 3)
-        generator.close()
-    finally:
-        fake.close()
-    [request] = fake.requests
+def test_openai_completion_form_continues_the_prompt_text(server):
+    generator = make_generator(openai_config(server.url, prompt_format="completion"), seed=0)
+    generations = generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 3)
+    generator.close()
+    [request] = server.requests
     assert request["path"] == "/v1/completions"
     assert request["body"]["prompt"] == PROMPT_TEXT and request["body"]["stop"] == list(COMPLETION_STOP)
     assert request["body"]["n"] == 3 and "messages" not in request["body"]
