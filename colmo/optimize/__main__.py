@@ -5,8 +5,11 @@ Prints the policy's score with its own constants, the tuned readable policy, its
 score (measured by the referee) and its held-out score; the last line of stdout is one JSON
 object (`score_initial`, `score`, `heldout_score`, `steps`, `evaluations`, `code`, ...). Also
 writes `tuned_policy.py` (with its scores in a header) and `result.json` to the Hydra run
-directory, and says where; with `tracker=mlflow`, also one MLflow run (colmo/track.py). With
-one program to tune and several workers, each candidate's episodes are spread over the workers.
+directory, and says where; with `tracker=mlflow`, also one MLflow run (`colmo.track`). With
+several workers, each candidate's episodes are spread over them when racing is off
+(`gfo.racing=false`, or `gfo=bo`); racing runs a candidate's episodes in order in one request,
+so that results do not depend on the number of workers, and the referee's final score is still
+spread.
 """
 
 from __future__ import annotations

@@ -6,8 +6,9 @@ evaluation), and each constant's step is proportional to its magnitude, so a gai
 threshold of 0.05 move on their own scales. Candidates go `gfo.workers` at a time through a
 `CandidateEvaluator`, which is where the sandboxed workers are; with racing, each candidate's
 episodes stop once it very likely cannot beat the best candidate so far
-(`colmo.evaluation.Race`), and the method is told its mean over the episodes it ran. A raced-out
-candidate never becomes the best, and every reported score is over all episodes.
+(`colmo.evaluation.Race`), and the method is told the estimate of its mean over all of them
+(`Race.estimate`). A raced-out candidate never becomes the best, and every reported score is
+over all episodes.
 
 `optimize_program` is the whole evaluation of one program: score it as written, tune it,
 round the tuned constants to the 4 significant digits it will be read with, score that
