@@ -19,7 +19,7 @@ job simulated (`ProgramResult.steps`: candidates, the rounded code and the refer
 The table reports medians over the programs and the ratio off/on; `score change` is the
 median tuned score with racing relative to without.
 
-    MENAGERIE_ROOT=/work/shared/menagerie python benchmarks/racing.py     # 5 tasks x 5 programs
+    MENAGERIE_ROOT=../shared/menagerie python benchmarks/racing.py     # 5 tasks x 5 programs
     python benchmarks/racing.py --tasks pendulum cheetah --programs 3 --workers 1
 """
 
