@@ -36,6 +36,8 @@ import ast
 import math
 import re
 
+from colmo.astutil import bound_names, rename
+
 _FENCE = re.compile(r"\s*```")
 # Lines that can open a stretch of code (definition, import, assignment); prose rarely does.
 _CODE_START = re.compile(r"\s*(?:(?:async\s+)?def\s|class\s|import\s|from\s+[\w.]+\s+import\s|@\w|[A-Za-z_]\w*\s*(?::[^=]+)?=(?!=))")
@@ -78,7 +80,7 @@ def _extract(text: str, function_name: str, prefix: str) -> str:
     if _is_empty(chosen):
         raise ExtractionError("empty policy body")
     module = ast.Module(body=_needed(chosen, statements), type_ignores=[])
-    _rename(module, chosen.name, function_name)
+    rename(module, {chosen.name: function_name})
     _add_missing_imports(module)
     return ast.unparse(module)
 
@@ -145,17 +147,6 @@ def _is_empty(function: ast.FunctionDef) -> bool:
     return all(isinstance(s, ast.Pass) or (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant)) for s in function.body)
 
 
-def _bound_names(statement: ast.stmt) -> list[str]:
-    if isinstance(statement, (ast.Import, ast.ImportFrom)):
-        return [alias.asname or alias.name.split(".")[0] for alias in statement.names]
-    if isinstance(statement, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-        return [statement.name]
-    if isinstance(statement, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
-        targets = statement.targets if isinstance(statement, ast.Assign) else [statement.target]
-        return [n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)]
-    return []  # statements that only run code
-
-
 def _free_names(statement: ast.stmt) -> set[str]:
     names = [n for n in ast.walk(statement) if isinstance(n, ast.Name)]
     loaded = {n.id for n in names if isinstance(n.ctx, ast.Load)}
@@ -170,7 +161,7 @@ def _needed(chosen: ast.FunctionDef, statements: list[ast.stmt]) -> list[ast.stm
     """`chosen` and the module-level statements it depends on: imports first, then answer order."""
     definitions: dict[str, list[ast.stmt]] = {}
     for statement in statements:
-        for name in _bound_names(statement):
+        for name in bound_names(statement):
             if isinstance(statement, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
                 definitions[name] = [statement]  # a redefinition replaces the earlier one
             else:
@@ -190,17 +181,9 @@ def _needed(chosen: ast.FunctionDef, statements: list[ast.stmt]) -> list[ast.stm
     return list(imports.values()) + [s for s in ordered if not isinstance(s, (ast.Import, ast.ImportFrom))]
 
 
-def _rename(module: ast.Module, old: str, new: str) -> None:
-    for node in ast.walk(module):
-        if isinstance(node, ast.FunctionDef) and node.name == old:
-            node.name = new
-        elif isinstance(node, ast.Name) and node.id == old:
-            node.id = new
-
-
 def _add_missing_imports(module: ast.Module) -> None:
-    bound = {name for statement in module.body for name in _bound_names(statement)}
-    bound |= {name for n in ast.walk(module) if isinstance(n, (ast.Import, ast.ImportFrom)) for name in _bound_names(n)}
+    bound = {name for statement in module.body for name in bound_names(statement)}
+    bound |= {name for n in ast.walk(module) if isinstance(n, (ast.Import, ast.ImportFrom)) for name in bound_names(n)}
     used = {n.id for n in ast.walk(module) if isinstance(n, ast.Name)}
     missing = [ast.parse(line).body[0] for name, line in _MISSING_IMPORTS.items() if name in used - bound]
     # Names bound anywhere (a local `pi = 3.14`, an argument) are not the math module's.

@@ -18,6 +18,7 @@ import copy
 import math
 from dataclasses import dataclass
 
+from colmo.astutil import bound_names, is_docstring, rename
 from colmo.database import Selection
 
 NUMPY_IMPORT = "import numpy as np"
@@ -91,7 +92,7 @@ def _render(codes: list[str], function_name: str) -> tuple[list[str], list[str],
         for statement in statements:
             if isinstance(statement, (ast.Import, ast.ImportFrom)):
                 imports[ast.unparse(statement)] = None
-        helpers = [s for s in statements if s not in policies and not _is_docstring(s) and not isinstance(s, (ast.Import, ast.ImportFrom))]
+        helpers = [s for s in statements if s not in policies and not is_docstring(s) and not isinstance(s, (ast.Import, ast.ImportFrom))]
 
         renames = {function_name: f"{function_name}_v{version}"}
         # Renaming one helper changes the text of the helpers that use it: repeat to a fixpoint.
@@ -100,14 +101,14 @@ def _render(codes: list[str], function_name: str) -> tuple[list[str], list[str],
             changed = False
             for helper in helpers:
                 text = ast.unparse(_renamed(helper, renames))
-                for name in _bound_names(helper):
+                for name in bound_names(helper):
                     if name not in renames and shown.get(name, text) != text:
                         renames[name] = f"{name}_v{version}"
                         changed = True
         for helper in helpers:
             text = ast.unparse(_renamed(helper, renames))
             definitions[text] = None
-            for name in _bound_names(helper):
+            for name in bound_names(helper):
                 shown.setdefault(renames.get(name, name), text)
 
         policy = _renamed(policies[-1], renames)  # the last definition is the one Python keeps
@@ -119,35 +120,8 @@ def _render(codes: list[str], function_name: str) -> tuple[list[str], list[str],
     return list(imports), list(definitions), versions, ast.unparse(policies[-1].args)
 
 
-def _is_docstring(statement: ast.stmt) -> bool:
-    return isinstance(statement, ast.Expr) and isinstance(statement.value, ast.Constant) and isinstance(statement.value.value, str)
-
-
-def _bound_names(statement: ast.stmt) -> list[str]:
-    """Module-level names a definition binds."""
-    if isinstance(statement, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-        return [statement.name]
-    if isinstance(statement, ast.Assign):
-        return [node.id for target in statement.targets for node in ast.walk(target) if isinstance(node, ast.Name)]
-    if isinstance(statement, ast.AnnAssign) and isinstance(statement.target, ast.Name):
-        return [statement.target.id]
-    return []
-
-
-class _Rename(ast.NodeTransformer):
-    def __init__(self, names: dict[str, str]) -> None:
-        self.names = names
-
-    def visit_Name(self, node: ast.Name) -> ast.Name:
-        node.id = self.names.get(node.id, node.id)
-        return node
-
-    def visit_FunctionDef(self, node: ast.FunctionDef) -> ast.FunctionDef:
-        node.name = self.names.get(node.name, node.name)
-        return self.generic_visit(node)
-
-    visit_AsyncFunctionDef = visit_ClassDef = visit_FunctionDef
-
-
 def _renamed(node: ast.AST, names: dict[str, str]) -> ast.AST:
-    return _Rename(names).visit(copy.deepcopy(node))
+    """A renamed copy of `node` (the selection's programs stay as stored)."""
+    copied = copy.deepcopy(node)
+    rename(copied, names)
+    return copied
