@@ -61,15 +61,12 @@ def finish(cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator
     heldout = heldout_evaluator(evaluator, cfg.seed, cfg.evaluation.episodes)
     best_took = 0.0  # seconds the best program's held-out score took: what simplifying costs per measurement
     for record in top:
-        limit = min(_left(until), heldout.referee_timeout_s)
-        if limit <= 0:
-            log.warning("no time left for %d held-out scores (search.max_seconds)", len(top) - len(best.heldout))
-            break
-        started = time.monotonic()
-        evaluation = heldout_score(executor, heldout, record.skeleton, record.params, timeout_s=limit)
-        if evaluation.failure == CANCELLED:  # the search is stopping at once
+        limit, started = min(_left(until), heldout.referee_timeout_s), time.monotonic()
+        evaluation = heldout_score(executor, heldout, record.skeleton, record.params, timeout_s=limit) if limit > 0 else None
+        if evaluation is not None and evaluation.failure == CANCELLED:  # the search is stopping at once
             return best
-        if evaluation.failure and limit < heldout.referee_timeout_s and _left(until) <= 0:  # cut by the time limit, not failed
+        # No time was left, or the time limit cut the evaluation short (it did not fail on its own).
+        if evaluation is None or (evaluation.failure and limit < heldout.referee_timeout_s and _left(until) <= 0):
             log.warning("no time left for %d held-out scores (search.max_seconds)", len(top) - len(best.heldout))
             break
         best_took = best_took or time.monotonic() - started
