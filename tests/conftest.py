@@ -50,6 +50,14 @@ def run_colmo(module: str, *overrides: str, cwd: Path, timeout: float = 300) -> 
     )
 
 
+def unavailable(reason: str, in_ci: str) -> None:
+    """Skip a test whose prerequisite is missing; under CI (`CI=true`) fail instead, saying why
+    the test must run there (`in_ci`)."""
+    if os.environ.get("CI") == "true":
+        pytest.fail(f"{reason} (CI=true: {in_ci})")
+    pytest.skip(reason)
+
+
 def last_json_line(stdout: str) -> dict:
     return json.loads(stdout.strip().splitlines()[-1])
 

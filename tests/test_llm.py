@@ -21,7 +21,7 @@ import urllib.request
 from pathlib import Path
 
 import pytest
-from conftest import run_colmo
+from conftest import run_colmo, unavailable
 
 pytestmark = pytest.mark.llm
 
@@ -38,9 +38,7 @@ SEARCH = (
 
 
 def _unavailable(reason: str) -> None:
-    if os.environ.get("CI") == "true":
-        pytest.fail(f"{reason} (CI=true: the llm tests must run)")
-    pytest.skip(reason)
+    unavailable(reason, "the llm tests must run")
 
 
 @pytest.fixture(scope="module")
