@@ -7,8 +7,10 @@ Generation and evaluation overlap: up to `search.queue_size` batches are in flig
 batch is generated while the workers evaluate the previous ones; each program of a batch is
 tuned in a thread of its own (the executor is shared). Batch `k` is always generated from the
 database after batches `0 .. k - queue_size` have been integrated, in order, so a run is a
-deterministic function of its seed whatever the timing. Every sample is written to the store
-as soon as its outcome is known.
+deterministic function of its seed whatever the timing. A batch is written to the store as
+`pending` as soon as it is generated, and each sample's row is replaced by its outcome as soon
+as that is known: the store's sample numbers never have a gap, and a resumed run evaluates
+what was generated but not evaluated.
 
 Stopping: `search.max_samples`, `search.stop_at_score`, and `search.max_seconds`, a wall-clock
 limit: at the deadline a generation in flight is abandoned and programs in flight stop tuning
@@ -43,7 +45,21 @@ from colmo.optimize import CandidateEvaluator, optimize_program
 from colmo.optimize.tune import calibrated
 from colmo.program import ParametricProgram, parametrize
 from colmo.prompt import build_prompt
-from colmo.record import DUPLICATE, FAILED, FINISHED, INTERRUPTED, UNUSABLE, BatchReport, Counters, Sample, SampleRecord, SearchObserver, Summary
+from colmo.record import (
+    DUPLICATE,
+    FAILED,
+    FINISHED,
+    INTERRUPTED,
+    PENDING,
+    TO_EVALUATE_AGAIN,
+    UNUSABLE,
+    BatchReport,
+    Counters,
+    Sample,
+    SampleRecord,
+    SearchObserver,
+    Summary,
+)
 from colmo.sandbox.check import ForbiddenProgram
 from colmo.signals import stop_signals
 from colmo.spec import Spec, load_task_spec
@@ -112,9 +128,9 @@ class Search:
                 self.evaluator = calibrated(self.executor, provisional, parametrize(self.spec.starter_code), self.cfg.executor.timeout_s)
                 self.database = ProgramDatabase(self.cfg.database, self._starter(), self.cfg.seed)
                 self.best_so_far = [(0, self.database.best.score)]
-                interrupted = self._replay()
+                to_evaluate = self._replay()
                 self._start_generator()
-                self._loop(interrupted)
+                self._loop(to_evaluate)
             except (KeyboardInterrupt, ExecutorClosed):  # a signal before the handlers were in place, or a second one
                 self.stop_reason = self.stop_reason or "interrupted"
             except StoreError as error:
@@ -164,24 +180,24 @@ class Search:
 
     def _replay(self) -> list[SampleRecord]:
         """Rebuild the database and counters from the store of an earlier run; the samples it
-        left interrupted, to evaluate first."""
-        batch, interrupted = None, []
+        left pending or interrupted, to evaluate first."""
+        batch, to_evaluate = None, []
         for record in self.store.records():
             if record.sample == STARTER_SAMPLE:
                 continue
             if batch is not None and record.batch != batch:
                 self.database.on_sample(self.counters.samples)
             batch = record.batch
-            if record.status == INTERRUPTED:
-                interrupted.append(record)
+            if record.status in TO_EVALUATE_AGAIN:
+                to_evaluate.append(record)
             else:
                 self._apply(record)
             self.next_sample, self.next_batch = record.sample + 1, record.batch + 1
         if batch is not None:
             self.database.on_sample(self.counters.samples)
-        if self.counters.samples or interrupted:
-            log.info("resumed %s: %d samples, best %.2f, %d to evaluate again", self.run_dir, self.counters.samples, self.database.best.score, len(interrupted))
-        return interrupted
+        if self.counters.samples or to_evaluate:
+            log.info("resumed %s: %d samples, best %.2f, %d to evaluate again", self.run_dir, self.counters.samples, self.database.best.score, len(to_evaluate))
+        return to_evaluate
 
     def _wants_probe(self) -> bool:
         return self.generator is None and getattr(GENERATORS.get(self.cfg.llm.name), "wants_probe", False)
@@ -223,16 +239,22 @@ class Search:
         seconds = time.perf_counter() - started
         self.generation_seconds += seconds
         batch = _Batch(self.next_batch, seconds, time.perf_counter())
+        samples = [
+            Sample(self.next_sample + i, batch.index, prompt.island, tuple(prompt.parent_keys), generation)
+            for i, generation in enumerate(generations)
+        ]
+        # Stored before any is evaluated (a full disk stops the search here, with no gap in the
+        # store's sample numbers); a run that stops before their outcomes land evaluates them on resume.
+        self.store.add(*(SampleRecord.of(sample, PENDING) for sample in samples))
         self.next_batch += 1
-        for generation in generations:
-            sample = Sample(self.next_sample, batch.index, prompt.island, tuple(prompt.parent_keys), generation)
-            self.next_sample += 1
+        self.next_sample += len(samples)
+        for sample in samples:
             batch.outcomes.append(self._submit(sample))
         self.in_flight_samples += len(batch.outcomes)
         return batch
 
     def _reevaluate(self, records: list[SampleRecord]) -> _Batch:
-        """The interrupted samples of a resumed run, as a batch of their own."""
+        """The pending and interrupted samples of a resumed run, as a batch of their own."""
         batch = _Batch(records[0].batch, 0.0, time.perf_counter())
         for record in records:
             generation = Generation(

@@ -1,12 +1,15 @@
 """The durable program store of a run, and the run directory's files and lock.
 
 A run directory holds `programs.db` (this store), `summary.json`, `best_policy.py`, and a lock
-file. The store is one SQLite file that records every sample as it lands: one row per
-generated sample, keyed by its sample index, with code, skeleton, initial and final constants,
-scores, per-episode returns, sizes, island, parents, generator and timings, and also failures,
-duplicates and unusable outputs with their reason. Rows are committed one at a time in WAL
-mode, so a run killed at any moment keeps every program it finished; the primary key makes a
-sample impossible to count twice. `resume=` rebuilds the search state by reading the rows back.
+file. The store is one SQLite file with one row per generated sample, keyed by its sample
+index. A batch's samples are committed as `pending` as soon as they are generated (the model's
+output, its prompt's island and parents, tokens and timings), in sample order and all or none,
+so the sample numbers in the store never have a gap; each row is then replaced by its outcome
+as it lands: code, skeleton, initial and final constants, scores, per-episode returns, sizes,
+or the reason of a failure, a duplicate, an unusable output. WAL mode and one commit per row:
+a run killed at any moment keeps every program it finished and every output it generated, and
+the primary key makes a sample impossible to count twice. `resume=` rebuilds the search state
+by reading the rows back and evaluates the `pending` and `interrupted` ones again.
 
 `open_run` opens (and locks) the store of a new or resumed run: a second search into the same
 directory, a resume with settings that change scores, a corrupt or empty store, or a directory
@@ -27,7 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Mapping, Optional
 
 from colmo.errors import ConfigError, RunError
-from colmo.record import INTERRUPTED, SampleRecord, Summary
+from colmo.record import TO_EVALUATE_AGAIN, SampleRecord, Summary
 
 log = logging.getLogger("colmo.store")
 
@@ -92,17 +95,20 @@ class ProgramStore:
     def meta(self) -> dict[str, Any]:
         return {name: json.loads(value) for name, value in self.connection.execute("SELECT name, value FROM run")}
 
-    def add(self, record: SampleRecord) -> None:
-        """Store a sample; an interrupted sample's row is replaced once it is evaluated."""
-        row = record.as_row()
-        for name in _JSON_FIELDS:
-            if row[name] is not None:
-                row[name] = json.dumps(list(row[name]))
-        columns = ", ".join(row)
+    def add(self, *records: SampleRecord) -> None:
+        """Store samples, all or none; a sample's pending or interrupted row is replaced by its
+        outcome."""
         with self._writing():
-            if record.status != INTERRUPTED:
-                self.connection.execute("DELETE FROM samples WHERE sample = ? AND status = ?", (record.sample, INTERRUPTED))
-            self.connection.execute(f"INSERT INTO samples({columns}) VALUES ({', '.join('?' * len(row))})", tuple(row.values()))
+            for record in records:
+                row = record.as_row()
+                for name in _JSON_FIELDS:
+                    if row[name] is not None:
+                        row[name] = json.dumps(list(row[name]))
+                self.connection.execute(
+                    f"DELETE FROM samples WHERE sample = ? AND status IN ({', '.join('?' * len(TO_EVALUATE_AGAIN))})",
+                    (record.sample, *TO_EVALUATE_AGAIN),
+                )
+                self.connection.execute(f"INSERT INTO samples({', '.join(row)}) VALUES ({', '.join('?' * len(row))})", tuple(row.values()))
 
     @contextlib.contextmanager
     def _writing(self) -> Iterator[None]:

@@ -3,14 +3,16 @@ agrees with the store, no sample number is skipped or counted twice, and user er
 one line naming the path.
 
 Ctrl-C and SIGTERM (once: the programs in flight finish with their best constants so far;
-twice: they are stored as interrupted and evaluated on resume), a full disk (simulated with a
-file-size limit), a second search into a locked run directory, a resume with other scoring
+twice: they are stored as interrupted and evaluated on resume), a SIGKILL while a batch is
+tuned (its generated samples stay pending and are evaluated on resume), a full disk (simulated
+with a file-size limit), a second search into a locked run directory, a resume with other scoring
 settings, empty and corrupt stores, and directories that cannot be written.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import resource
 import signal
 import sqlite3
@@ -24,14 +26,14 @@ TINY = ("task.episodes=2", "tracker=none", "executor.workers=2", "search.progres
 SLOW = ("gfo.budget=200", "llm.batch_size=4")  # programs that tune long enough to be caught in flight
 
 
-def rows(run_dir: Path) -> list[tuple]:
+def rows(run_dir: Path, columns: str = "sample, status, cut_short") -> list[tuple]:
     """The store's samples (read-only, while a search may be writing)."""
     path = run_dir / "programs.db"
     if not path.is_file():
         return []
     try:
         with sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=30) as connection:
-            return connection.execute("SELECT sample, status, cut_short FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
+            return connection.execute(f"SELECT {columns} FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
     except sqlite3.OperationalError:  # the schema is not there yet
         return []
 
@@ -45,9 +47,9 @@ def run_dir_of(cwd: Path) -> Path:
 
 
 def busy_workers(run_dir: Path) -> bool:
-    """Samples are being tuned: the first generated sample is stored, its batch mates are in
-    flight (each tunes for a while with `SLOW`)."""
-    return bool(rows(run_dir))
+    """Samples are being tuned: the first generated sample's outcome is stored, its batch mates
+    are in flight (each tunes for a while with `SLOW`)."""
+    return any(status != "pending" for _, status, _ in rows(run_dir))
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
@@ -112,10 +114,33 @@ def test_a_full_disk_ends_the_search_cleanly_with_the_store_intact(tmp_path):
     with sqlite3.connect(run_dir / "programs.db") as connection:
         assert connection.execute("PRAGMA integrity_check").fetchone() == ("ok",)
     stored = rows(run_dir)
+    # Whichever write failed (a batch's pending rows, or an outcome that landed before an
+    # earlier sample's), the store's sample numbers have no gap: samples in flight stay pending.
     assert stored and [sample for sample, *_ in stored] == list(range(len(stored)))
     result = run_colmo("colmo", *overrides[:-1], f"resume={run_dir}", "search.max_samples=" + str(len(stored) + 4), cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    assert [sample for sample, *_ in rows(run_dir)] == list(range(len(stored) + 4))
+    after = rows(run_dir)
+    assert [sample for sample, *_ in after] == list(range(len(stored) + 4))
+    assert all(status != "pending" for _, status, _ in after)
+
+
+def test_a_killed_search_keeps_what_was_generated_and_resume_evaluates_it(tmp_path):
+    """SIGKILL while a batch is being tuned: its samples are in the store as `pending`, with the
+    generator's output; the resumed run evaluates those outputs under their own numbers instead
+    of generating new ones."""
+    process = start(tmp_path, "search.max_samples=8", *TINY, *SLOW, start_new_session=True)
+    run_dir = run_dir_of(tmp_path)
+    wait_for(lambda: any(status == "pending" for _, status, _ in rows(run_dir)), timeout=600, what="a generated batch in the store")
+    os.killpg(process.pid, signal.SIGKILL)  # the coordinator and its sandbox workers
+    process.communicate(timeout=60)
+    pending = {sample: raw for sample, status, raw in rows(run_dir, "sample, status, raw") if status == "pending"}
+    assert pending
+    result = run_colmo("colmo", "search.max_samples=8", *TINY, *SLOW, f"resume={run_dir}", cwd=tmp_path, timeout=600)
+    assert result.returncode == 0, result.stderr
+    after = {sample: (status, raw) for sample, status, raw in rows(run_dir, "sample, status, raw")}
+    assert sorted(after) == list(range(8))
+    assert all(after[sample][0] != "pending" and after[sample][1] == raw for sample, raw in pending.items())
+    assert f"{len(pending)} to evaluate again" in result.stdout + result.stderr
 
 
 def test_a_second_search_into_a_run_directory_in_use_is_one_line(tmp_path):
