@@ -18,6 +18,8 @@ from typing import Optional
 
 import mujoco
 
+from colmo.errors import failure_reason
+
 _CANDIDATES = ("egl", "osmesa")
 _DISABLED = ("disable", "disabled", "off", "false", "0")
 _PROBE_TIMEOUT_S = 120.0  # generous: the probe imports mujoco on a possibly loaded machine
@@ -70,7 +72,7 @@ def _selection_for(requested: str) -> tuple[Optional[str], str]:
             try:
                 _use(backend)
             except Exception as error:  # e.g. PyOpenGL already loaded here for another platform
-                reason = f"{type(error).__name__}: {error}".replace("\n", " ")[:120]
+                reason = failure_reason(f"{type(error).__name__}: {error}")
             else:
                 return backend, ""
         failures.append(f"MUJOCO_GL={backend}: {reason}")
