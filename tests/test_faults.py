@@ -17,6 +17,7 @@ import resource
 import signal
 import sqlite3
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -130,7 +131,16 @@ def test_a_killed_search_keeps_what_was_generated_and_resume_evaluates_it(tmp_pa
     of generating new ones."""
     process = start(tmp_path, "search.max_samples=8", *TINY, *SLOW, start_new_session=True)
     run_dir = run_dir_of(tmp_path)
-    wait_for(lambda: any(status == "pending" for _, status, _ in rows(run_dir)), timeout=600, what="a generated batch in the store")
+
+    def pending_samples() -> set[int]:
+        return {sample for sample, status, _ in rows(run_dir) if status == "pending"}
+
+    def being_tuned() -> bool:  # pending for a while: not a duplicate about to settle, a program in tuning
+        before = pending_samples()
+        time.sleep(0.2)
+        return bool(before & pending_samples())
+
+    wait_for(being_tuned, timeout=600, what="a generated batch in the store")
     os.killpg(process.pid, signal.SIGKILL)  # the coordinator and its sandbox workers
     process.communicate(timeout=60)
     pending = {sample: raw for sample, status, raw in rows(run_dir, "sample, status, raw") if status == "pending"}
