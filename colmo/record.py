@@ -26,7 +26,6 @@ EVALUATED, FAILED, DUPLICATE, UNUSABLE, INTERRUPTED = "evaluated", "failed", "du
 # Generated, its outcome not stored yet: a run that stops (or is killed) before the outcome lands
 # leaves it pending, and a resumed run evaluates it, as it does an interrupted one.
 PENDING = "pending"
-STATUSES = (EVALUATED, FAILED, DUPLICATE, UNUSABLE, INTERRUPTED, PENDING)
 TO_EVALUATE_AGAIN = (INTERRUPTED, PENDING)
 FINISHED = ("max_samples", "max_seconds", "stop_at_score")  # the stop reasons of a run that reached its limits
 

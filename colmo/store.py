@@ -93,7 +93,7 @@ class ProgramStore:
             self.connection.execute("UPDATE samples SET heldout_score = ? WHERE sample = ?", (score, sample))
 
     def meta(self) -> dict[str, Any]:
-        return {name: json.loads(value) for name, value in self.connection.execute("SELECT name, value FROM run")}
+        return _run_settings_in(self.connection)
 
     def add(self, *records: SampleRecord) -> None:
         """Store samples, all or none; a sample's pending or interrupted row is replaced by its
@@ -162,13 +162,10 @@ class RunLock:
 def open_run(run_dir: Path, settings: Mapping[str, Any], resume: bool) -> tuple[ProgramStore, RunLock]:
     """The locked store of a new run in `run_dir` (recording `settings`), or of the earlier run
     there (whose recorded settings must equal `settings`)."""
-    path = run_dir / STORE_FILE
     if resume:
-        if not path.is_file():
-            raise ConfigError(f"resume={run_dir} is not a colmo run directory (no {STORE_FILE} in it)")
-        if path.stat().st_size == 0:
-            raise ConfigError(f"{path} is empty: not a colmo program store")
+        path = _existing_store(run_dir)
     else:
+        path = run_dir / STORE_FILE
         try:
             run_dir.mkdir(parents=True, exist_ok=True)
         except OSError as error:
@@ -211,20 +208,30 @@ def _shown(value: Any) -> str:
 
 def open_for_resume(run_dir: Path, settings: Mapping[str, Any]) -> None:
     """Check, without locking or changing anything, that `run_dir` can be resumed with `settings`."""
+    path = _existing_store(run_dir)
+    try:
+        connection = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+        try:
+            recorded = _run_settings_in(connection)
+        finally:
+            connection.close()
+    except sqlite3.DatabaseError as error:
+        raise ConfigError(f"{path} is not a colmo program store ({error})") from None
+    check_settings(run_dir, recorded, settings)
+
+
+def _existing_store(run_dir: Path) -> Path:
+    """The store file of the earlier run in `run_dir`, or `ConfigError` saying why there is none."""
     path = run_dir / STORE_FILE
     if not path.is_file():
         raise ConfigError(f"resume={run_dir} is not a colmo run directory (no {STORE_FILE} in it)")
     if path.stat().st_size == 0:
         raise ConfigError(f"{path} is empty: not a colmo program store")
-    try:
-        connection = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
-        try:
-            rows = connection.execute("SELECT name, value FROM run").fetchall()
-        finally:
-            connection.close()
-    except sqlite3.DatabaseError as error:
-        raise ConfigError(f"{path} is not a colmo program store ({error})") from None
-    check_settings(run_dir, {name: json.loads(value) for name, value in rows}, settings)
+    return path
+
+
+def _run_settings_in(connection: sqlite3.Connection) -> dict[str, Any]:
+    return {name: json.loads(value) for name, value in connection.execute("SELECT name, value FROM run")}
 
 
 def write_outputs(summary: Summary, run_dir: Path) -> None:
