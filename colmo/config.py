@@ -121,10 +121,9 @@ class ExecutorConfig:
     def __post_init__(self) -> None:
         _require(self.name in ("local", "ray"), f"executor.name must be local or ray; got {self.name!r}")
         _require(self.name != "ray" or isinstance(self, RayExecutorConfig), "executor.name=ray needs the ray options: use executor=ray")
-        _at_least(self, "executor", max_retries=0)
+        _at_least(self, "executor", max_retries=0, memory_mb=256)
         _require(self.workers >= 0, f"executor.workers must be >= 0 (0 = all cores), got {self.workers}")
         _require(self.timeout_s is None or self.timeout_s > 0, f"executor.timeout_s must be > 0, got {self.timeout_s}")
-        _at_least(self, "executor", memory_mb=256)
 
     @property
     def n_workers(self) -> int:
@@ -154,12 +153,9 @@ class DatabaseConfig:
     max_nodes: Optional[int] = option(None, "programs bigger than this many AST nodes are refused before they are evaluated; null: no cap")
 
     def __post_init__(self) -> None:
-        _at_least(self, "database", num_islands=1, functions_per_prompt=1)
+        _at_least(self, "database", num_islands=1, functions_per_prompt=1, cluster_temperature_period=1, size_penalty=0)
         _require(self.reset_every >= 0, f"database.reset_every must be >= 0 (0 = never), got {self.reset_every}")
-        _require(self.cluster_temperature_init > 0, "database.cluster_temperature_init must be > 0")
-        _require(self.cluster_temperature_period >= 1, "database.cluster_temperature_period must be >= 1")
-        _require(self.length_temperature > 0, "database.length_temperature must be > 0")
-        _at_least(self, "database", size_penalty=0)
+        _above(self, "database", cluster_temperature_init=0, length_temperature=0)
         _require(self.max_nodes is None or self.max_nodes >= 1, f"database.max_nodes must be >= 1, got {self.max_nodes}")
 
 
@@ -203,9 +199,8 @@ class LanguageModelConfig(GeneratorConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         _require(self.prompt_format in PROMPT_FORMATS, f"llm.prompt_format must be chat or completion, got {self.prompt_format!r}")
-        _at_least(self, "llm", temperature=0)
+        _at_least(self, "llm", temperature=0, max_tokens=1)
         _require(0 < self.top_p <= 1, f"llm.top_p must be in (0, 1], got {self.top_p}")
-        _at_least(self, "llm", max_tokens=1)
 
 
 @dataclass
@@ -260,7 +255,7 @@ class VLLMConfig(LanguageModelConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         _require(0 < self.gpu_memory_utilization <= 1, "llm.gpu_memory_utilization must be in (0, 1]")
-        _require(self.tensor_parallel_size >= 1 and self.pipeline_parallel_size >= 1, "llm parallel sizes must be >= 1")
+        _at_least(self, "llm", tensor_parallel_size=1, pipeline_parallel_size=1)
 
 
 @dataclass
@@ -337,9 +332,8 @@ class SearchLoopConfig:
     progress_every_s: float = option(30.0, "seconds between plain progress lines when stderr is not a terminal")
 
     def __post_init__(self) -> None:
-        _at_least(self, "search", max_samples=1)
+        _at_least(self, "search", max_samples=1, queue_size=1)
         _require(self.max_seconds >= 0, f"search.max_seconds must be >= 0 (0 = no limit), got {self.max_seconds}")
-        _at_least(self, "search", queue_size=1)
         _above(self, "search", progress_every_s=0)
 
 
