@@ -139,6 +139,10 @@ def count_lines(code: str) -> int:
     (so the count does not depend on the author's line wrapping)."""
     tree = _parse(code)
     strip_docstrings(tree)
+    return _line_count(tree)
+
+
+def _line_count(tree: ast.Module) -> int:
     return sum(1 for line in ast.unparse(tree).splitlines() if line.strip())
 
 
@@ -156,7 +160,7 @@ class ProgramSize:
 def measure(code: str) -> ProgramSize:
     tree = _parse(code)
     strip_docstrings(tree)
-    return ProgramSize(count_lines(code), node_count(tree), len(_tunable_literals(tree)))
+    return ProgramSize(_line_count(tree), node_count(tree), len(_tunable_literals(tree)))
 
 
 def structure_key(skeleton: str) -> str:
