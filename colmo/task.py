@@ -18,6 +18,7 @@ from typing import Callable, Sequence
 import mujoco
 import numpy as np
 
+from colmo.errors import describe_exception
 from colmo.evaluation import Evaluation, Race
 
 Policy = Callable[[np.ndarray], object]
@@ -178,10 +179,8 @@ def act(policy: Policy, obs: np.ndarray, action_size: int, step: int) -> np.ndar
     `PolicyFailure` with the reason if the policy fails or its output is not an action."""
     try:
         raw = policy(obs)
-    except MemoryError as error:
-        raise PolicyFailure(f"memory: {str(error) or 'out of memory'} (step {step})") from None
     except Exception as error:  # the policy is untrusted code: any error is its failure
-        raise PolicyFailure(f"exception: {type(error).__name__}: {error} (step {step})") from None
+        raise PolicyFailure(describe_exception(error, f" (step {step})")) from None
     try:
         return as_action(raw, action_size)
     except PolicyFailure as failure:

@@ -287,6 +287,16 @@ def test_a_forged_score_is_caught_by_the_referee(sandbox, baseline, escaped_spec
     assert_unharmed(sandbox, baseline)  # nor in the next process
 
 
+@pytest.mark.parametrize("statement", ["raise ValueError('x' * 2_000_000)", "raise MemoryError('y' * 2_000_000)"])
+def test_a_huge_failure_message_is_the_same_bounded_reason_with_the_referee(sandbox, baseline, statement):
+    """A program chooses its exception's message: both modes store the same one-line reason,
+    at most 500 characters (a 2 MB message must not break the referee's channel)."""
+    fast, refereed = (sandbox.evaluate(policy_doing(statement), mode=mode) for mode in (FAST, REFEREE))
+    assert fast.failure == refereed.failure and len(refereed.failure) == 500
+    assert refereed.failure.startswith(("exception: ValueError: xxx", "memory: yyy"))
+    assert_unharmed(sandbox, baseline)
+
+
 def test_a_timeout_kills_the_evaluation_and_the_worker_goes_on(sandbox, baseline):
     sandbox.evaluate(GOOD)
     worker = sandbox.worker_pid

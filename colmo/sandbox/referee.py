@@ -97,8 +97,8 @@ def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd:
         elif tag == b"O":
             try:
                 action = act(policy, np.frombuffer(payload, dtype=np.float64).copy(), action_size, step)
-            except PolicyFailure as failure:
-                channel.send(b"F", str(failure).encode())
+            except PolicyFailure as failure:  # its text is the program's to choose (a type's name): bounded
+                channel.send(b"F", failure_reason(str(failure)).encode())
                 return
             except BaseException as error:  # SystemExit and friends raised by the policy
                 channel.send(b"F", describe_exception(error, f" (step {step})").encode())
