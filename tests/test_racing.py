@@ -159,6 +159,14 @@ def test_spreading_episodes_over_workers_gives_the_same_result(pendulum):
     assert (one.params, one.evaluation.returns, one.steps, one.evaluations) == (two.params, two.evaluation.returns, two.steps, two.evaluations)
 
 
+def test_an_evaluation_spread_over_workers_reports_their_time(pendulum):
+    executor, evaluator, program, _ = pendulum
+    whole = CandidateEvaluator(executor, evaluator, program.skeleton).referee(program.values)
+    spread = CandidateEvaluator(executor, evaluator, program.skeleton, 2).referee(program.values)
+    assert spread.returns == whole.returns and spread.steps == whole.steps
+    assert spread.seconds > 0  # the two parts' time (it was dropped: 0)
+
+
 def test_colmo_optimize_reports_the_steps_simulated(tmp_path):
     common = (f"policy_file={EXAMPLES / 'pendulum_mistuned.py'}", "gfo.budget=10", "task.episodes=3", "evaluation.episodes=3", "executor.workers=2")
     off = run_colmo("colmo.optimize", *common, "gfo.racing=false", cwd=tmp_path)

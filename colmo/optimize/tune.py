@@ -80,12 +80,15 @@ class CandidateEvaluator:
 
 
 def _joined(parts: list[Evaluation]) -> Evaluation:
-    """One evaluation from the evaluations of consecutive parts of the seeds."""
+    """One evaluation from the evaluations of consecutive parts of the seeds; its `seconds` is
+    the workers' time over all parts."""
     if len(parts) == 1:
         return parts[0]
     returns = tuple(r for part in parts for r in part.returns)
     failure = next((part.failure for part in parts if part.failure), None)
-    return Evaluation(returns, failure, sum(part.steps for part in parts), any(part.raced_out for part in parts))
+    return Evaluation(
+        returns, failure, sum(part.steps for part in parts), any(part.raced_out for part in parts), sum(part.seconds for part in parts)
+    )
 
 
 @dataclass(frozen=True)
