@@ -65,12 +65,13 @@ class RayExecutor(Dispatcher):
         actor_class = ray.remote(num_cpus=1, max_restarts=0)(_EvaluationActor)
         self._new_actor = lambda: actor_class.remote(cfg.memory_mb, cfg.max_retries)
         self._actors: list[Any] = [self._new_actor() for _ in range(self.n_workers)]
+        self._pids: list[Optional[int]] = [None] * self.n_workers
         try:
             # Wait for every actor now, so that a cluster where colmo cannot run fails at once.
             started = [actor.pid.remote() for actor in self._actors]
             if ray.wait(started, num_returns=len(started), timeout=_STARTUP_NOTICE_S)[1]:
                 log.warning("waiting for %d Ray actors to start: the cluster has %s CPUs free", self.n_workers, ray.available_resources().get("CPU", 0))
-            self._pids: list[Optional[int]] = ray.get(started)
+            self._pids[:] = ray.get(started)
         except ray.exceptions.RayError as error:
             self._stop_actors(graceful=False)
             self._shutdown_ray()
