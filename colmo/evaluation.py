@@ -7,7 +7,7 @@
 - `Evaluation`: its outcome: per-episode returns or the failure reason, the control steps
   simulated, and whether racing cut it short.
 - `Executor`: anything that evaluates batches of requests, results in request order.
-- `batch_evaluator`: the `evaluate_batch(params_list)` callable that tunes one program.
+- `Evaluator`: a task's evaluation settings, which make the request for a program.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Optional, Protocol, Sequence
+from typing import TYPE_CHECKING, Any, Optional, Protocol, Sequence
 
 import numpy as np
 
@@ -181,9 +181,6 @@ class WorkerLost(Exception):
     the message says how. Executors retry the request on a fresh worker."""
 
 
-EvaluateBatch = Callable[[Sequence[Sequence[float]]], list[Evaluation]]
-
-
 class Executor(Protocol):
     """Anything that evaluates batches of requests, results in request order (local sandboxed
     processes, a Ray cluster). Thread-safe: several programs' optimizers share one executor."""
@@ -222,15 +219,13 @@ class Evaluator:
         (`colmo.optimize.tune.calibrated`)."""
         return cls(str(spec.path), tuple(sorted(env.items())), tuple(seeds), spec.allowed_imports, timeout_s, timeout_s, memory_mb)
 
-    def request(self, skeleton: str, params: Sequence[float], **options: Any) -> EvalRequest:
-        fields = dict(seeds=self.seeds, timeout_s=self.timeout_s, memory_mb=self.memory_mb) | options
-        return EvalRequest(self.spec, self.env, skeleton=skeleton, params=tuple(float(p) for p in params), allowed_imports=self.allowed_imports, **fields)
-
-
-def batch_evaluator(executor: Executor, evaluator: Evaluator, skeleton: str, **options: Any) -> EvaluateBatch:
-    """The `evaluate_batch(params_list)` callable that GFO methods use for one program."""
-
-    def evaluate_batch(params_list: Sequence[Sequence[float]]) -> list[Evaluation]:
-        return executor.evaluate([evaluator.request(skeleton, params, **options) for params in params_list])
-
-    return evaluate_batch
+    def request(self, skeleton: str, params: Sequence[float], timeout_s: Optional[float] = None, **options: Any) -> EvalRequest:
+        """The request for a program with `params`, limited to `timeout_s` or else to the time
+        limit of its mode; `options` are other `EvalRequest` fields."""
+        if timeout_s is None:
+            timeout_s = self.referee_timeout_s if options.get("mode") == REFEREE else self.timeout_s
+        fields = dict(seeds=self.seeds, memory_mb=self.memory_mb) | options
+        return EvalRequest(
+            self.spec, self.env, skeleton=skeleton, params=tuple(float(p) for p in params), allowed_imports=self.allowed_imports,
+            timeout_s=timeout_s, **fields,
+        )

@@ -71,9 +71,8 @@ class CandidateEvaluator:
         """The referee's evaluation of one vector over all the seeds (split over
         `episode_chunks` requests), each request limited to `timeout_s` if given."""
         seeds = self.evaluator.seeds
-        limit = self.evaluator.referee_timeout_s if timeout_s is None else timeout_s
         requests = [
-            self.evaluator.request(self.skeleton, params, seeds=tuple(seeds[i] for i in chunk), mode=REFEREE, timeout_s=limit)
+            self.evaluator.request(self.skeleton, params, seeds=tuple(seeds[i] for i in chunk), mode=REFEREE, timeout_s=timeout_s)
             for chunk in self.chunks
         ]
         return _joined(self.executor.evaluate(requests))

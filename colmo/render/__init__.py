@@ -93,9 +93,7 @@ def render_policy(
     there is no trace to draw."""
     start = time.monotonic()
     seed = evaluator.seeds[episode]
-    request = evaluator.request(
-        skeleton, params, seeds=(seed,), mode=REFEREE, trace=True, steps=steps, timeout_s=evaluator.referee_timeout_s
-    )
+    request = evaluator.request(skeleton, params, seeds=(seed,), mode=REFEREE, trace=True, steps=steps)
     evaluation = executor.evaluate([request])[0]
     where = f"episode {episode} (seed {seed})"
     trace, reason = None, None

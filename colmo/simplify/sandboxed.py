@@ -62,7 +62,7 @@ class RefereeScores:
         parts = max(1, min(len(seeds), math.ceil(self.executor.n_workers / max(1, len(programs)))))
         chunks = [tuple(int(seeds[i]) for i in chunk) for chunk in np.array_split(np.arange(len(seeds)), parts)]
         requests = [
-            self.evaluator.request(program.skeleton, program.values, seeds=chunk, mode=REFEREE, timeout_s=self.evaluator.referee_timeout_s)
+            self.evaluator.request(program.skeleton, program.values, seeds=chunk, mode=REFEREE)
             for program in programs.values()
             for chunk in chunks
         ]
