@@ -25,8 +25,9 @@ from colmo.cli import SCHEMAS, hydra_app
 from colmo.config import ExecutorConfig, TaskConfig, option
 from colmo.evaluation import Evaluation, Evaluator, Executor
 from colmo.intake import read_policy_file
-from colmo.optimize.tune import CandidateEvaluator, calibrated, finite_or_none
+from colmo.optimize.tune import CandidateEvaluator, calibrated
 from colmo.program import ParametricProgram, parametrize
+from colmo.record import finite_or_none
 from colmo.spec import Spec, load_task_spec
 from colmo.task import episode_seeds, heldout_seeds
 

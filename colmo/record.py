@@ -41,7 +41,8 @@ class Sample:
     generation: "Generation"
 
 
-def _finite(value: float) -> Optional[float]:
+def finite_or_none(value: float) -> Optional[float]:
+    """JSON has no infinity: a failed score is stored and reported as null."""
     return value if math.isfinite(value) else None
 
 
@@ -98,7 +99,7 @@ class SampleRecord:
             size = result.size
             fields.update(
                 status=FAILED if result.failure else EVALUATED, failure=result.failure, code=result.code,
-                params=tuple(result.params), initial_score=_finite(result.initial.score), score=_finite(result.score),
+                params=tuple(result.params), initial_score=finite_or_none(result.initial.score), score=finite_or_none(result.score),
                 returns=tuple(result.evaluation.returns), evaluations=result.evaluations, steps=result.steps,
                 raced_out=result.raced_out, cut_short=result.cut_short, evaluation_seconds=result.seconds,
                 lines=size.lines, nodes=size.nodes,

@@ -12,7 +12,6 @@ from colmo.optimize.tune import (
     CandidateEvaluator,
     ProgramResult,
     Tuning,
-    finite_or_none,
     optimize_program,
     round_significant,
     step_sizes,
@@ -20,6 +19,6 @@ from colmo.optimize.tune import (
 )
 
 __all__ = [
-    "DISPLAY_DIGITS", "METHODS", "CandidateEvaluator", "Method", "ProgramResult", "Tuning", "finite_or_none",
+    "DISPLAY_DIGITS", "METHODS", "CandidateEvaluator", "Method", "ProgramResult", "Tuning",
     "optimize_program", "register", "round_significant", "step_sizes", "tune",
 ]

@@ -27,7 +27,8 @@ from colmo.config import OptimizeConfig
 from colmo.evaluate import heldout_evaluator, heldout_score, task_evaluator
 from colmo.executor import make_executor
 from colmo.intake import read_policy_file
-from colmo.optimize.tune import CandidateEvaluator, finite_or_none, optimize_program
+from colmo.optimize.tune import CandidateEvaluator, optimize_program
+from colmo.record import finite_or_none
 from colmo.spec import load_task_spec
 
 log = logging.getLogger("colmo.optimize")

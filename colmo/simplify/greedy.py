@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Sequence
 
 from colmo.program import ProgramSize, measure, parametrize
+from colmo.record import finite_or_none
 from colmo.simplify.candidates import Candidate, deletion_candidates
 from colmo.simplify.deadcode import remove_dead_code
 
@@ -90,7 +91,10 @@ class Step:
     size: ProgramSize
 
     def to_json(self) -> dict[str, Any]:
-        return {"description": self.description, "score": _finite(self.scores.train), "heldout_score": _finite(self.scores.heldout), "size": self.size.nodes}
+        return {
+            "description": self.description, "score": finite_or_none(self.scores.train),
+            "heldout_score": finite_or_none(self.scores.heldout), "size": self.size.nodes,
+        }
 
 
 @dataclass(frozen=True)
@@ -113,10 +117,10 @@ class SimplifyResult:
         """The report's fields; sizes are AST node counts; non-finite scores are None (JSON has
         no infinities)."""
         return {
-            "score_initial": _finite(self.scores_initial.train),
-            "heldout_score_initial": _finite(self.scores_initial.heldout),
-            "score": _finite(self.scores.train),
-            "heldout_score": _finite(self.scores.heldout),
+            "score_initial": finite_or_none(self.scores_initial.train),
+            "heldout_score_initial": finite_or_none(self.scores_initial.heldout),
+            "score": finite_or_none(self.scores.train),
+            "heldout_score": finite_or_none(self.scores.heldout),
             "size_initial": self.size_initial.nodes,
             "size": self.size.nodes,
             "lines_initial": self.size_initial.lines,
@@ -133,10 +137,6 @@ class SimplifyResult:
             "retuned": self.retuned,
             "seconds": round(self.seconds, 3),
         }
-
-
-def _finite(value: float) -> Optional[float]:
-    return value if math.isfinite(value) else None
 
 
 @dataclass
