@@ -116,7 +116,7 @@ def _drop_unused_imports(tree: ast.Module) -> None:
     """Module-level imports nothing uses are not structure: a copy of a program that leaves out
     its unused `import numpy as np` is the same program."""
     used = {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)}
-    tree.body = [s for s in tree.body if not isinstance(s, (ast.Import, ast.ImportFrom)) or set(bound_names(s)) & used] or tree.body
+    tree.body = [s for s in tree.body if not isinstance(s, (ast.Import, ast.ImportFrom)) or set(bound_names(s)) & used]
 
 
 def instantiate(skeleton: str, values: Sequence[float], digits: int | None = None) -> str:
@@ -179,10 +179,6 @@ def _parse(code: str) -> ast.Module:
         raise ProgramError(f"unparseable source: {error}") from None
 
 
-def _is_number(value: object) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
 def _value(node: ast.expr) -> int | float:
     if isinstance(node, ast.UnaryOp):
         return -node.operand.value if isinstance(node.op, ast.USub) else node.operand.value
@@ -222,7 +218,7 @@ class _Literals(ast.NodeVisitor):
             self.tunable.append(node)
 
     def visit_Constant(self, node: ast.Constant) -> None:
-        if _is_number(node.value):
+        if is_number_literal(node):
             self._literal(node)
 
     def visit_UnaryOp(self, node: ast.UnaryOp) -> None:

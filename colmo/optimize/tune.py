@@ -20,7 +20,6 @@ cut short by `stop()` (a deadline) keeps its best constants unrounded, saving th
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Callable, Optional, Sequence
@@ -119,7 +118,7 @@ def tune(evaluate: CandidateEvaluator, x0: Sequence[float], cfg: "GFOConfig", se
     evaluations, steps, raced_out, cut_short = 1, initial.steps, 0, False
     if cfg.method != "none" and len(x0) and not initial.failure:
         method = METHODS[cfg.method].make(len(x0), cfg, seed)
-        method.tell(method.ask()[0], None if initial.failure else initial.score)  # the first ask is z = 0, i.e. x0
+        method.tell(method.ask()[0], initial.score)  # the first ask is z = 0, i.e. x0
         scale = step_sizes(x0, cfg)
         while evaluations < cfg.budget:
             if stop():
@@ -229,7 +228,3 @@ def calibrated(executor: Executor, evaluator: Evaluator, starter: ParametricProg
         referee_timeout_s=max(TIMEOUT_FLOOR_S, TIMEOUT_FACTOR * referee.seconds),
     )
 
-
-def finite_or_none(value: float) -> float | None:
-    """JSON has no infinity: a failed score is reported as null."""
-    return value if math.isfinite(value) else None
