@@ -75,14 +75,18 @@ def finish(cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator
         best.heldout.append({"sample": record.sample, "key": record.key, "score": record.score, "heldout_score": score, "heldout_failure": evaluation.failure})
         shown = "failed" if score is None else f"{score:.2f}"
         log.info("sample %d: training score %.2f, held-out %s over %d episodes", record.sample, record.score, shown, len(heldout.seeds))
-    # Simplifying first measures the best program on the training and the held-out episodes.
-    if top and cfg.evaluation.simplify and (not best.heldout or _left(until) < 2 * best_took):
-        log.warning("no time left to simplify the best policy (search.max_seconds)")
-    elif top and cfg.evaluation.simplify:
-        best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, until)
-    if top and cfg.evaluation.render and _left(until) < _RENDER_SECONDS:
-        log.warning("no time left for the video and plot of the best policy (search.max_seconds)")
-    elif top and cfg.evaluation.render:
+    if not top:
+        return best
+    if cfg.evaluation.simplify:
+        # Simplifying first measures the best program on the training and the held-out episodes.
+        if not best.heldout or _left(until) < 2 * best_took:
+            log.warning("no time left to simplify the best policy (search.max_seconds)")
+        else:
+            best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, until)
+    if cfg.evaluation.render:
+        if _left(until) < _RENDER_SECONDS:
+            log.warning("no time left for the video and plot of the best policy (search.max_seconds)")
+            return best
         from colmo.render import render_policy  # matplotlib and the renderer: only when asked for
 
         title = f"{cfg.task.name}: best policy (sample {top[0].sample}, training score {top[0].score:.1f})"

@@ -87,7 +87,6 @@ def main(cfg: SimplifyAppConfig) -> None:
     executor = make_executor(cfg.executor)
     try:
         spec, evaluator = task_evaluator(cfg.task, cfg.executor, executor, cfg.seed)
-        read_policy_file(cfg.policy_file, spec.allowed_imports)
         code = extract_policy(text)
         heldout = heldout_evaluator(evaluator, cfg.seed, cfg.evaluation.episodes)
         log.info(
