@@ -20,7 +20,7 @@ import types
 from typing import Any, Callable, Sequence
 
 from colmo.errors import describe_exception
-from colmo.sandbox.check import NUMPY_SUBMODULES, ForbiddenProgram, attribute_allowed, check_program, module_allowed
+from colmo.sandbox.check import NUMPY_SUBMODULES, ForbiddenProgram, attribute_allowed, check_tree, module_allowed, parse_program
 
 
 def _discard(*args: object, **kwargs: object) -> None:
@@ -126,8 +126,9 @@ def load_policy(skeleton: str, allowed_imports: Sequence[str], params: Sequence[
     module copies with `params` as its constants, and return its `policy`. Raises
     `ForbiddenProgram` for a refused or policy-less program; whatever the module code raises
     propagates (the caller reports it)."""
-    check_program(skeleton, allowed_imports)
-    code = compile(skeleton, "<policy>", "exec")
+    tree = parse_program(skeleton)
+    check_tree(tree, allowed_imports)
+    code = compile(tree, "<policy>", "exec")  # the tree checked, not a second parse
     builtins_ = dict(_SAFE_BUILTINS, __import__=_guarded_import(frozenset(allowed_imports)))
     namespace = {"__builtins__": builtins_, "__name__": "policy_module", "params": tuple(params)}
     exec(code, namespace)
