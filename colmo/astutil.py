@@ -1,5 +1,5 @@
 """Small AST helpers shared by every module that reads or rewrites program code: docstrings,
-the names a statement binds, renaming identifiers, replacing nodes, and counting nodes.
+the names a statement or a node binds, renaming identifiers, replacing nodes, and counting nodes.
 
 They work on `ast` trees only and never run code.
 """
@@ -7,7 +7,7 @@ They work on `ast` trees only and never run code.
 from __future__ import annotations
 
 import ast
-from typing import Mapping, Sequence
+from typing import Iterator, Mapping, Sequence
 
 _DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
 
@@ -47,6 +47,25 @@ def bound_names(statement: ast.stmt) -> list[str]:
         targets = statement.targets if isinstance(statement, ast.Assign) else [statement.target]
         return sorted(stored_names(targets))
     return []  # statements that only run code
+
+
+def bindings(node: ast.AST) -> Iterator[str]:
+    """The names one node binds, wherever it is: stored names, parameters, definitions,
+    imports, exception handlers, match captures, and the names `global`/`nonlocal` declare."""
+    if isinstance(node, ast.Name) and not isinstance(node.ctx, ast.Load):
+        yield node.id
+    elif isinstance(node, ast.arg):
+        yield node.arg
+    elif isinstance(node, _DEFINITIONS):
+        yield node.name
+    elif isinstance(node, ast.alias):
+        yield node.asname or node.name.split(".")[0]
+    elif isinstance(node, (ast.ExceptHandler, ast.MatchAs, ast.MatchStar)) and node.name:
+        yield node.name
+    elif isinstance(node, ast.MatchMapping) and node.rest:
+        yield node.rest
+    elif isinstance(node, (ast.Global, ast.Nonlocal)):
+        yield from node.names
 
 
 # Fields of AST nodes that bind or name an identifier, besides Name, Attribute and imports.

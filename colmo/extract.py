@@ -36,7 +36,7 @@ import ast
 import math
 import re
 
-from colmo.astutil import bound_names, rename
+from colmo.astutil import bindings, bound_names, rename
 
 _FENCE = re.compile(r"\s*```")
 # Lines that can open a stretch of code (definition, import, assignment); prose rarely does.
@@ -187,9 +187,7 @@ def _add_missing_imports(module: ast.Module) -> None:
     used = {n.id for n in ast.walk(module) if isinstance(n, ast.Name)}
     missing = [ast.parse(line).body[0] for name, line in _MISSING_IMPORTS.items() if name in used - bound]
     # Names bound anywhere (a local `pi = 3.14`, an argument) are not the math module's.
-    bound_anywhere = bound | {n.id for n in ast.walk(module) if isinstance(n, ast.Name) and not isinstance(n.ctx, ast.Load)}
-    bound_anywhere |= {a.arg for a in ast.walk(module) if isinstance(a, ast.arg)}
-    bound_anywhere |= {n.name for n in ast.walk(module) if isinstance(n, (ast.FunctionDef, ast.ClassDef, ast.ExceptHandler)) and n.name}
+    bound_anywhere = {name for node in ast.walk(module) for name in bindings(node)}
     from_math = sorted((used - bound_anywhere) & _MATH_NAMES)
     if from_math:
         missing.append(ast.ImportFrom(module="math", names=[ast.alias(name) for name in from_math], level=0))

@@ -179,6 +179,11 @@ def policy(obs):
             "def abs(x):\n    return x\ndef policy(obs):\n    return abs(-2.0) * obs[0]",
             id="a rebound builtin is not folded",
         ),
+        pytest.param(
+            "import numpy as np\ndef policy(obs):\n    match obs[0]:\n        case np:\n            return np.abs(-4.4)",
+            "import numpy as np\ndef policy(obs):\n    match obs[0]:\n        case np:\n            return np.abs(-4.4)",
+            id="a name a match pattern captures is not the module",
+        ),
     ],
 )
 def test_dead_code_cases(code, expected):

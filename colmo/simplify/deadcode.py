@@ -20,9 +20,9 @@ import copy
 from dataclasses import dataclass
 from typing import Iterator, Optional
 
-from colmo.astutil import strip_docstrings
+from colmo.astutil import bindings, strip_docstrings
 from colmo.simplify.fold import Fold
-from colmo.simplify.scope import Scope, bindings
+from colmo.simplify.scope import Scope
 
 BLOCKS = ("body", "orelse", "finalbody")
 FUNCTIONS = (ast.FunctionDef, ast.AsyncFunctionDef)
@@ -195,11 +195,11 @@ class _Liveness:
         if isinstance(s, (ast.Import, ast.ImportFrom)):
             if any(alias.name == "*" for alias in s.names):
                 return s, live
-            aliases = [a for a in s.names if not self.removable({a.asname or a.name.split(".")[0]}, live)]
+            aliases = [a for a in s.names if not self.removable(set(bindings(a)), live)]
             if not aliases:
                 return None, live
             s.names = aliases
-            return s, live - {a.asname or a.name.split(".")[0] for a in aliases}
+            return s, live - {name for a in aliases for name in bindings(a)}
         if isinstance(s, FUNCTIONS):  # a definition runs its decorators and defaults only
             evaluated = [*s.decorator_list, *s.args.defaults, *(d for d in s.args.kw_defaults if d)]
             if self.removable({s.name}, live) and all(self.scope.is_pure(e) for e in evaluated):

@@ -17,11 +17,11 @@ from __future__ import annotations
 import ast
 import builtins
 import math
-from typing import Callable, Iterator, Optional
+from typing import Callable, Optional
 
 import numpy as np
 
-from colmo.astutil import is_number_literal
+from colmo.astutil import bindings, is_number_literal
 
 # Numeric functions without side effects whose results are plain numbers for number arguments:
 # the only functions the folder calls, on literals only.
@@ -63,23 +63,6 @@ _FRESH = {
 }
 _MODULES = {"numpy": np, "math": math, "builtins": builtins}
 NOT_A_LITERAL = object()  # what `Scope.value` returns for an operand that is not a known number
-
-
-def bindings(node: ast.AST) -> Iterator[str]:
-    """The names one node binds: stored names, parameters, definitions, imports, handlers, and
-    the names `global`/`nonlocal` declare."""
-    if isinstance(node, ast.Name) and not isinstance(node.ctx, ast.Load):
-        yield node.id
-    elif isinstance(node, ast.arg):
-        yield node.arg
-    elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-        yield node.name
-    elif isinstance(node, ast.alias):
-        yield node.asname or node.name.split(".")[0]
-    elif isinstance(node, ast.ExceptHandler) and node.name:
-        yield node.name
-    elif isinstance(node, (ast.Global, ast.Nonlocal)):
-        yield from node.names
 
 
 class Scope:
