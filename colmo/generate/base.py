@@ -7,6 +7,7 @@ from __future__ import annotations
 import abc
 import importlib
 import logging
+import random
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, ClassVar, Optional, Sequence, TypeVar
 
@@ -46,6 +47,12 @@ class Generator(abc.ABC):
     def __init__(self, cfg, seed: int, probe: Optional[Probe] = None) -> None:
         self.cfg = cfg
         self.probe = probe
+        self._request_seeds = random.Random(seed)
+
+    def request_seed(self) -> int:
+        """A fresh sampling seed for one request to a model, drawn from the run's seed: the same
+        prompt must not get the same answers every time, and a run must repeat."""
+        return self._request_seeds.randrange(2**31)
 
     @abc.abstractmethod
     def generate(self, prompt: Prompt, n: int) -> list[Generation]:
@@ -83,12 +90,13 @@ def register(name: str) -> Callable[[G], G]:
 
 
 def batch_of(
-    texts: Sequence[str], generator: str, prompt_tokens: int, completion_tokens: Sequence[int], seconds: float
+    texts: Sequence[str], generator: str, prompt_tokens: int, completion_tokens: Sequence[int], seconds: float, prefix: str = ""
 ) -> list[Generation]:
-    """The generations of one request. Its prompt is counted on the first only and its time is
-    split evenly, so that sums over generations are the request's totals."""
+    """The generations of one request (continuing `prefix`, for a completion). Its prompt is
+    counted on the first only and its time is split evenly, so that sums over generations are
+    the request's totals."""
     return [
-        Generation(text, generator, prompt_tokens if i == 0 else 0, completion, seconds / len(texts))
+        Generation(text, generator, prompt_tokens if i == 0 else 0, completion, seconds / len(texts), prefix)
         for i, (text, completion) in enumerate(zip(texts, completion_tokens))
     ]
 

@@ -14,7 +14,6 @@ written at its next token (only the end-of-text token is left to sample) and the
 
 from __future__ import annotations
 
-import random
 import threading
 import time
 from pathlib import Path
@@ -44,7 +43,6 @@ class LlamaCppGenerator(Generator):
         else:
             source, model = f"{cfg.repo_id}/{cfg.filename}", f"{cfg.repo_id}/{cfg.filename}"
         self.name = f"llamacpp:{model}"
-        self._seeds = random.Random(seed)
         self._cancelled = threading.Event()
         start = time.perf_counter()
         try:
@@ -78,7 +76,7 @@ class LlamaCppGenerator(Generator):
     def _sample(self, prompt: Prompt) -> Generation:
         cfg = self.cfg
         sampling = dict(
-            temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self._seeds.randrange(2**31),
+            temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self.request_seed(),
             logits_processor=self._until_cancelled,
         )
         chat = cfg.prompt_format == "chat"

@@ -22,7 +22,6 @@ more requests and retries none; requests in flight end on their own.
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import os
 import random
@@ -89,7 +88,6 @@ class OpenAIGenerator(Generator):
         self._stopped = False  # cancelled or closed: nothing more is sent
         self._failures = 0  # consecutive failed attempts, all servers together
         self._use_n = cfg.use_n
-        self._seeds = random.Random(seed)
         self._pool = ThreadPoolExecutor(max_workers=cfg.batch_size, thread_name_prefix="colmo-openai")
         self._check_servers()
 
@@ -114,8 +112,8 @@ class OpenAIGenerator(Generator):
             logger.warning("openai: %s does not answer; using the other servers until it does", server)
 
     def generate(self, prompt: Prompt, n: int) -> list[Generation]:
-        generations = self._complete(prompt, n, self._seeds.randrange(2**31)) if self._use_n and n > 1 else []
-        seeds = [self._seeds.randrange(2**31) for _ in range(n - len(generations))]
+        generations = self._complete(prompt, n, self.request_seed()) if self._use_n and n > 1 else []
+        seeds = [self.request_seed() for _ in range(n - len(generations))]
         for batch in self._pool.map(lambda seed: self._complete(prompt, 1, seed), seeds):
             generations += batch
         return generations
@@ -234,7 +232,5 @@ class OpenAIGenerator(Generator):
             "openai: %s: %d completions, %d prompt + %d completion tokens, %.1fs",
             server.url, len(texts), prompt_tokens, completion_tokens, seconds,
         )
-        generations = batch_of(texts, f"openai:{self.cfg.model}@{server.url}", prompt_tokens, _split(completion_tokens, len(texts)), seconds)
-        if self.cfg.prompt_format == "chat":
-            return generations
-        return [dataclasses.replace(generation, prefix=prompt.text) for generation in generations]
+        prefix = "" if self.cfg.prompt_format == "chat" else prompt.text
+        return batch_of(texts, f"openai:{self.cfg.model}@{server.url}", prompt_tokens, _split(completion_tokens, len(texts)), seconds, prefix)

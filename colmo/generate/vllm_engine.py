@@ -8,8 +8,6 @@ vllm runs `vllm.LLM` in this process (`pip install 'colmo[vllm]'`) and samples t
 
 from __future__ import annotations
 
-import dataclasses
-import random
 import time
 from typing import Optional
 
@@ -27,9 +25,6 @@ class VLLMGenerator(Generator):
         vllm = import_library("vllm", "vLLM", "vllm")
         self.name = f"vllm:{cfg.model}"
         self._sampling_params = vllm.SamplingParams
-        # The engine seed is the config's; each request gets its own seed, or the same prompt
-        # would be answered with the same batch every time.
-        self._seeds = random.Random(seed)
         try:
             self._llm = vllm.LLM(
                 model=cfg.model, quantization=cfg.quantization, dtype=cfg.dtype,
@@ -43,7 +38,7 @@ class VLLMGenerator(Generator):
         cfg = self.cfg
         chat = cfg.prompt_format == "chat"
         params = self._sampling_params(
-            n=n, temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self._seeds.randrange(2**31),
+            n=n, temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self.request_seed(),  # the engine's seed is the config's
             **({} if chat else {"stop": list(COMPLETION_STOP)}),
         )
         start = time.perf_counter()
@@ -58,8 +53,8 @@ class VLLMGenerator(Generator):
             "vllm: %d completions, %d prompt + %d completion tokens, %.1fs",
             len(output.outputs), prompt_tokens, sum(completion_tokens), seconds,
         )
-        generations = batch_of([completion.text for completion in output.outputs], self.name, prompt_tokens, completion_tokens, seconds)
-        return generations if chat else [dataclasses.replace(g, prefix=prompt.text) for g in generations]
+        texts = [completion.text for completion in output.outputs]
+        return batch_of(texts, self.name, prompt_tokens, completion_tokens, seconds, "" if chat else prompt.text)
 
     def close(self) -> None:
         self._llm = None  # the engine frees its GPU memory when collected
