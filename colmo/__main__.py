@@ -38,7 +38,7 @@ def main(cfg: SearchConfig) -> Optional[float]:
 
         observers += (make_tracker(cfg, run_dir),)
     search = Search(cfg, run_dir, observers)
-    with progress(cfg, search):
+    with progress(search):
         summary = search.run()
     print(summary.best_code or "")
     heldout = f", held-out {summary.best_heldout_score:.2f}" if summary.best_heldout_score is not None else ""

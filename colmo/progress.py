@@ -24,8 +24,9 @@ from rich.logging import RichHandler
 from rich.progress_bar import ProgressBar
 from rich.table import Table
 
+from colmo.record import busy_fractions
+
 if TYPE_CHECKING:
-    from colmo.config import SearchConfig
     from colmo.search import Search
 
 log = logging.getLogger("colmo.search")
@@ -111,13 +112,13 @@ def snapshot(search: "Search") -> Snapshot:
     """What `search` has done so far."""
     elapsed = time.perf_counter() - search.start
     executor = search.executor
-    busy = executor.busy_seconds / (elapsed * executor.n_workers) if elapsed else 0.0
+    generator_busy, evaluator_busy = busy_fractions(search.generation_seconds, executor.busy_seconds, executor.n_workers, elapsed)
     limits = search.cfg.search
     return Snapshot(
         samples=search.counters.samples, max_samples=limits.max_samples, in_flight=search.in_flight_samples,
         evaluations=executor.evaluations_done, steps=executor.steps_done, elapsed=elapsed,
         best=search.database.best.score if search.database else None,
-        generator_busy=search.generation_seconds / elapsed if elapsed else 0.0, evaluator_busy=busy,
+        generator_busy=generator_busy, evaluator_busy=evaluator_busy,
         max_seconds=limits.max_seconds, stop_at_score=limits.stop_at_score,
     )
 
@@ -173,11 +174,12 @@ def plain_lines(search: "Search", every_s: float) -> Iterator[None]:
         done.set()
 
 
-def progress(cfg: "SearchConfig", search: "Search", console: Optional[Console] = None) -> contextlib.AbstractContextManager:
+def progress(search: "Search", console: Optional[Console] = None) -> contextlib.AbstractContextManager:
     """The live display on a terminal, plain lines otherwise, nothing when `search.progress` is off."""
-    console = console or Console(stderr=True)
-    if not cfg.search.progress:
+    limits = search.cfg.search
+    if not limits.progress:
         return contextlib.nullcontext()
+    console = console or Console(stderr=True)
     if console.is_terminal:
         return live_display(search, console)
-    return plain_lines(search, cfg.search.progress_every_s)
+    return plain_lines(search, limits.progress_every_s)

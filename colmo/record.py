@@ -110,6 +110,14 @@ class SampleRecord:
         return asdict(self)
 
 
+def busy_fractions(generation_seconds: float, evaluation_seconds: float, workers: int, wall: float) -> tuple[float, float]:
+    """How busy the generator and the evaluation workers were: fractions of the wall time (the
+    workers' together)."""
+    if not wall:
+        return 0.0, 0.0
+    return generation_seconds / wall, evaluation_seconds / (wall * workers)
+
+
 @dataclass(frozen=True)
 class Totals:
     """What a search has done so far, as both reports say it."""

@@ -59,6 +59,7 @@ from colmo.record import (
     SampleRecord,
     SearchObserver,
     Summary,
+    busy_fractions,
 )
 from colmo.sandbox.check import ForbiddenProgram
 from colmo.signals import stop_signals
@@ -393,11 +394,10 @@ class Search:
     def _totals(self) -> dict:
         """What both reports say: the counters, rates, and busy fractions of the wall time so far."""
         wall = time.perf_counter() - self.start
+        generator_busy, evaluator_busy = busy_fractions(self.generation_seconds, self.executor.busy_seconds, self.executor.n_workers, wall)
         return self.counters.totals() | dict(
             evaluations_per_second=self.counters.evaluations / wall if wall else 0.0,
-            generator_busy=self.generation_seconds / wall if wall else 0.0,
-            evaluator_busy=self.executor.busy_seconds / (wall * self.executor.n_workers) if wall else 0.0,
-            seconds=wall,
+            generator_busy=generator_busy, evaluator_busy=evaluator_busy, seconds=wall,
         )
 
     def _report(self, batch: _Batch) -> BatchReport:

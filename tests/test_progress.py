@@ -92,7 +92,7 @@ def test_without_a_terminal_a_plain_line_every_few_seconds(caplog):
     search = fake_search()
     console = Console(file=io.StringIO())  # not a terminal
     with caplog.at_level(logging.INFO, logger="colmo.search"):
-        with progress(search.cfg, search, console):
+        with progress(search, console):
             deadline = time.monotonic() + 60
             while sum("progress: samples 3/10 (+2 in flight) | evals 7" in m for m in caplog.messages) < 2 and time.monotonic() < deadline:
                 time.sleep(0.05)
@@ -106,7 +106,7 @@ def test_progress_off_shows_nothing(caplog):
     search = fake_search()
     search.cfg.search.progress = False
     console = Console(file=io.StringIO(), force_terminal=True)
-    with caplog.at_level(logging.INFO, logger="colmo.search"), progress(search.cfg, search, console):
+    with caplog.at_level(logging.INFO, logger="colmo.search"), progress(search, console):
         time.sleep(0.3)
     assert console.file.getvalue() == "" and not [m for m in caplog.messages if m.startswith("progress: ")]
 

@@ -139,6 +139,11 @@ class TrackedRun:
     sweep_dir: Optional[Path]
     hydra_dir: Optional[Path]  # Hydra's config files of this job
 
+    def log_hydra_config(self) -> None:
+        """Hydra's config files of this job, as the run's `hydra/` artifacts."""
+        if self.hydra_dir is not None and self.hydra_dir.is_dir():
+            self.client.log_artifacts(self.run_id, str(self.hydra_dir), "hydra")
+
     def end(self, status: str) -> None:
         retry_locked(self.client.set_terminated, self.run_id, status)
         if self.parent_id is not None:
@@ -228,8 +233,7 @@ class MlflowTracker:
         for kind in ("plot", "video"):  # the best policy on a held-out episode
             if kind in summary.media and (run_dir / summary.media[kind]).is_file():
                 self.client.log_artifact(self.run_id, str(run_dir / summary.media[kind]), "best_policy")
-        if self.run.hydra_dir is not None and self.run.hydra_dir.is_dir():
-            self.client.log_artifacts(self.run_id, str(self.run.hydra_dir), "hydra")
+        self.run.log_hydra_config()
         if self.steps:
             self.client.log_figure(self.run_id, self._figure(summary.task), PLOT_FILE)
         self.run.end(_status(summary))
@@ -317,8 +321,7 @@ def track_optimize(cfg: OptimizeConfig, result: dict[str, Any], files: Sequence[
         log_metrics(run.client, run.run_id, {name: result.get(name) for name in OPTIMIZE_METRICS}, 0)
         for path in files:
             run.client.log_artifact(run.run_id, str(path))
-        if run.hydra_dir is not None and run.hydra_dir.is_dir():
-            run.client.log_artifacts(run.run_id, str(run.hydra_dir), "hydra")
+        run.log_hydra_config()
     except BaseException:
         run.end(FAILED)
         raise
