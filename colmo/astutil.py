@@ -7,6 +7,7 @@ They work on `ast` trees only and never run code.
 from __future__ import annotations
 
 import ast
+import math
 from typing import Iterator, Mapping, Sequence
 
 _DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
@@ -66,6 +67,11 @@ def bindings(node: ast.AST) -> Iterator[str]:
         yield node.rest
     elif isinstance(node, (ast.Global, ast.Nonlocal)):
         yield from node.names
+
+
+# Fields whose subtree is no value a rewrite may replace or drop on its own: an index and what it
+# indexes (`obs[2]`), a callee (`np.tanh`), an attribute's object (`np` in `np.pi`).
+OPAQUE_FIELDS = {(ast.Subscript, "slice"), (ast.Subscript, "value"), (ast.Call, "func"), (ast.Attribute, "value")}
 
 
 # Fields of AST nodes that bind or name an identifier, besides Name, Attribute and imports.
@@ -131,6 +137,14 @@ def is_number_literal(node: ast.AST) -> bool:
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
         node = node.operand
     return isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool)
+
+
+def number_literal(value: int | float | bool) -> ast.expr:
+    """The literal for a number; a negative one (-0.0 too) is written `-x`, a unary minus, so
+    that `ast.unparse` parenthesizes it where needed: `(-2.0) ** 2`."""
+    if isinstance(value, bool) or not math.copysign(1.0, value) < 0:
+        return ast.Constant(value)
+    return ast.UnaryOp(ast.USub(), ast.Constant(-value))
 
 
 def node_count(tree: ast.AST) -> int:

@@ -117,7 +117,7 @@ class EvalRequest:
     allowed_imports: tuple[str, ...]
     steps: Optional[int] = None  # episodes cut to this many control steps (a probe); None: whole
     mode: str = FAST
-    timeout_s: float = 600.0  # wall-clock limit for the whole request
+    timeout_s: float = PROVISIONAL_TIMEOUT_S  # wall-clock limit for the whole request
     memory_mb: int = 4096  # address-space limit of the process running the policy
     race: Optional[Race] = None
     trace: bool = False  # referee mode: also record the episode (`colmo.trace.EpisodeTrace`)

@@ -42,11 +42,20 @@ from __future__ import annotations
 
 import ast
 import hashlib
-import math
 from dataclasses import dataclass
 from typing import Sequence
 
-from colmo.astutil import bound_names, identifiers, is_number_literal, node_count, rename, replace_nodes, stored_names, strip_docstrings
+from colmo.astutil import (
+    bound_names,
+    identifiers,
+    is_number_literal,
+    node_count,
+    number_literal,
+    rename,
+    replace_nodes,
+    stored_names,
+    strip_docstrings,
+)
 
 PARAMS_NAME = "params"
 
@@ -372,7 +381,4 @@ def _literal(value: float, digits: int | None) -> ast.expr:
     value = float(value)
     if digits is not None:
         value = float(f"{value:.{digits}g}")
-    # A negative value is written `-x` (unary minus) so ast.unparse parenthesizes it where needed: (-2.0) ** 2.
-    if math.copysign(1.0, value) < 0:
-        return ast.UnaryOp(ast.USub(), ast.Constant(-value))
-    return ast.Constant(value)
+    return number_literal(value)

@@ -25,7 +25,7 @@ New constants get random signs and plausible magnitudes: the GFO tunes them afte
 Observation indices stay below the observation size, read from "obs size is N" or "Observation
 (size N)" in the prompt, else from the indices the programs read. A candidate is redrawn unless
 its structure key (`colmo.program`: the search's duplicate test) differs from its parents' and
-its siblings', and it passes the `probe` it was given: in a search, `colmo.sandbox.ProgramProbe`
+its siblings', and it passes the `probe` it was given: in a search, `colmo.generate.probe.ProgramProbe`
 runs it for the first control steps of the task in a sandbox worker (programs never run in this
 process) and wants valid actions. After `llm.attempts` redraws the child is a parent with its
 constants perturbed by a relative gaussian of `constant_sigma`, a duplicate the search skips.

@@ -15,16 +15,13 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
-from colmo.astutil import is_docstring, replace_nodes
+from colmo.astutil import OPAQUE_FIELDS, is_docstring, replace_nodes
 
 _FUNCTIONS = ("sin", "cos", "tanh", "sign", "abs")
 _ARITHMETIC = (ast.Add, ast.Sub, ast.Mult, ast.Div)
 _FLIPPED = {ast.Lt: ast.Gt, ast.Gt: ast.Lt, ast.LtE: ast.GtE, ast.GtE: ast.LtE, ast.Eq: ast.NotEq, ast.NotEq: ast.Eq}
 _VALUE_KINDS = (ast.BinOp, ast.Call, ast.Name, ast.Attribute, ast.Subscript, ast.IfExp)
 # Fields whose subtrees are not values to rewrite: indices, called functions, attribute owners.
-_OPAQUE_FIELDS = {(ast.Subscript, "slice"), (ast.Subscript, "value"), (ast.Call, "func"), (ast.Attribute, "value")}
-
-
 def _is_number(node: ast.AST) -> bool:
     return isinstance(node, ast.Constant) and type(node.value) in (int, float)
 
@@ -45,7 +42,7 @@ def value_nodes(root: ast.AST) -> list[ast.expr]:
 
     def visit(node: ast.AST) -> None:
         for field, value in ast.iter_fields(node):
-            if (type(node), field) in _OPAQUE_FIELDS:
+            if (type(node), field) in OPAQUE_FIELDS:
                 continue
             for child in value if isinstance(value, list) else [value]:
                 if isinstance(child, ast.AST):

@@ -20,9 +20,8 @@ import math
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Optional
 
-from colmo.astutil import is_number_literal, node_count, strip_docstrings
+from colmo.astutil import OPAQUE_FIELDS, is_number_literal, node_count, number_literal, strip_docstrings
 from colmo.simplify.deadcode import FUNCTIONS, own_statements, remove_dead_code
-from colmo.simplify.fold import number_literal
 
 
 @dataclass(frozen=True)
@@ -32,9 +31,8 @@ class Candidate:
     nodes: int  # its AST nodes, `colmo.astutil.node_count`
 
 
-# Where an expression is not a value to simplify: indices, called functions, attribute owners,
-# assignment targets, and what only the interpreter reads.
-_OPAQUE = {(ast.Subscript, "slice"), (ast.Subscript, "value"), (ast.Call, "func"), (ast.Attribute, "value")}
+# Where an expression is not a value to simplify, besides `OPAQUE_FIELDS`: assignment targets,
+# and what only the interpreter reads.
 _NOT_VALUES = ("targets", "target", "decorator_list", "annotation", "returns", "args")  # `args` of a def, not of a call
 _DROP_SIDES = {
     ast.Add: ("left", "right"), ast.Sub: ("left", "right"), ast.Mult: ("left", "right"),
@@ -69,7 +67,7 @@ def _value_positions(tree: ast.Module) -> Iterator[ast.expr]:
     for node in ast.walk(tree):
         for name, value in ast.iter_fields(node):
             children = value if isinstance(value, list) else [value]
-            if (type(node), name) in _OPAQUE or (name in _NOT_VALUES and not isinstance(node, ast.Call)):
+            if (type(node), name) in OPAQUE_FIELDS or (name in _NOT_VALUES and not isinstance(node, ast.Call)):
                 opaque.update(id(n) for child in children if isinstance(child, ast.AST) for n in ast.walk(child))
     inside_functions = {id(n) for f in ast.walk(tree) if isinstance(f, FUNCTIONS) for s in f.body for n in ast.walk(s)}
     for node in ast.walk(tree):

@@ -18,7 +18,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from colmo.astutil import is_number_literal
+from colmo.astutil import is_number_literal, number_literal
 from colmo.simplify.scope import NOT_A_LITERAL, Scope
 
 _BINARY = {
@@ -28,13 +28,6 @@ _BINARY = {
 _UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos, ast.Not: operator.not_, ast.Invert: operator.invert}
 _COMPARE = {ast.Lt: operator.lt, ast.LtE: operator.le, ast.Gt: operator.gt, ast.GtE: operator.ge, ast.Eq: operator.eq, ast.NotEq: operator.ne}
 _MAX_EXACT_INT = 2**53
-
-
-def number_literal(value: int | float | bool) -> ast.expr:
-    """The literal for a value; a negative number is written `-x`, as `colmo.program` does."""
-    if isinstance(value, bool) or not math.copysign(1.0, value) < 0:
-        return ast.Constant(value)
-    return ast.UnaryOp(ast.USub(), ast.Constant(-value))
 
 
 def _plain_number(value: object) -> object:
