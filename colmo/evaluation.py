@@ -140,6 +140,16 @@ class Evaluation:
         every comparison."""
         return -math.inf if self.failure or not self.returns else float(np.mean(self.returns))
 
+    @classmethod
+    def joined(cls, parts: Sequence["Evaluation"]) -> "Evaluation":
+        """One evaluation from the evaluations of consecutive parts of the seeds: the first
+        failure, every return in order, and the workers' time over all parts."""
+        if len(parts) == 1:
+            return parts[0]
+        returns = tuple(r for part in parts for r in part.returns)
+        failure = next((part.failure for part in parts if part.failure), None)
+        return cls(returns, failure, sum(part.steps for part in parts), any(part.raced_out for part in parts), sum(part.seconds for part in parts))
+
     def to_bytes(self) -> bytes:
         """The evaluation as JSON (what a sandbox process sends back)."""
         failure = failure_reason(self.failure) if self.failure else None

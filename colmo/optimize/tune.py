@@ -64,7 +64,7 @@ class CandidateEvaluator:
             for chunk in chunks
         ]
         parts = self.executor.evaluate(requests)
-        return [_joined(parts[k : k + len(chunks)]) for k in range(0, len(parts), len(chunks))]
+        return [Evaluation.joined(parts[k : k + len(chunks)]) for k in range(0, len(parts), len(chunks))]
 
     def referee(self, params: Sequence[float], timeout_s: Optional[float] = None) -> Evaluation:
         """The referee's evaluation of one vector over all the seeds (split over
@@ -74,19 +74,7 @@ class CandidateEvaluator:
             self.evaluator.request(self.skeleton, params, seeds=tuple(seeds[i] for i in chunk), mode=REFEREE, timeout_s=timeout_s)
             for chunk in self.chunks
         ]
-        return _joined(self.executor.evaluate(requests))
-
-
-def _joined(parts: list[Evaluation]) -> Evaluation:
-    """One evaluation from the evaluations of consecutive parts of the seeds; its `seconds` is
-    the workers' time over all parts."""
-    if len(parts) == 1:
-        return parts[0]
-    returns = tuple(r for part in parts for r in part.returns)
-    failure = next((part.failure for part in parts if part.failure), None)
-    return Evaluation(
-        returns, failure, sum(part.steps for part in parts), any(part.raced_out for part in parts), sum(part.seconds for part in parts)
-    )
+        return Evaluation.joined(self.executor.evaluate(requests))
 
 
 @dataclass(frozen=True)

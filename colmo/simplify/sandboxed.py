@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Callable, Optional, Sequence
 import numpy as np
 
 from colmo.errors import RunError
-from colmo.evaluation import REFEREE, Evaluator, Executor
+from colmo.evaluation import REFEREE, Evaluation, Evaluator, Executor
 from colmo.intake import Unusable, read_program
 from colmo.optimize.tune import CandidateEvaluator, optimize_program
 from colmo.program import ParametricProgram
@@ -69,14 +69,10 @@ class RefereeScores:
         evaluations = self.executor.evaluate(requests) if requests else []
         scores = {}
         for k, code in enumerate(programs):
-            own = evaluations[k * parts : (k + 1) * parts]
-            failure = next((e.failure for e in own if e.failure), None)
-            returns = [r for e in own for r in e.returns]
-            if failure or not returns:
-                self.failures[code] = failure or "no episodes"
-                scores[code] = -math.inf
-            else:
-                scores[code] = float(np.mean(returns))
+            evaluation = Evaluation.joined(evaluations[k * parts : (k + 1) * parts])
+            if evaluation.failure or not evaluation.returns:
+                self.failures[code] = evaluation.failure or "no episodes"
+            scores[code] = evaluation.score
         return [scores.get(code, -math.inf) for code in codes]
 
 
