@@ -45,6 +45,12 @@ class RefereeTimeout(Exception):
     """The child did not answer before the evaluation's deadline."""
 
 
+def write_all(fd: int, data: bytes) -> None:
+    """Write all of `data` to the pipe `fd` (a write may take only part of it)."""
+    while data:
+        data = data[os.write(fd, data):]
+
+
 class _Channel:
     """Frames over a pair of pipe descriptors, reads bounded by a deadline."""
 
@@ -53,9 +59,7 @@ class _Channel:
         self.buffer = b""
 
     def send(self, tag: bytes, payload: bytes = b"") -> None:
-        data = _HEADER.pack(tag, len(payload)) + payload
-        while data:
-            data = data[os.write(self.write_fd, data):]
+        write_all(self.write_fd, _HEADER.pack(tag, len(payload)) + payload)
 
     def receive(self) -> tuple[bytes, bytes]:
         tag, length = _HEADER.unpack(self._read(_HEADER.size))

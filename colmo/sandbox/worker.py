@@ -39,7 +39,7 @@ from colmo.errors import describe_exception
 from colmo.evaluation import FAST, REFEREE, EvalRequest, Evaluation
 from colmo.sandbox.confine import enter_sandbox
 from colmo.sandbox.namespace import load_or_explain, template
-from colmo.sandbox.referee import RefereeTimeout, referee_evaluation, serve_policy
+from colmo.sandbox.referee import RefereeTimeout, referee_evaluation, serve_policy, write_all
 from colmo.task import Environment, evaluate_policy
 
 _PR_SET_PDEATHSIG = 1
@@ -92,7 +92,7 @@ class Worker:
 
     def _fast(self, env: Environment, request: EvalRequest, deadline: float) -> Evaluation:
         read_fd, write_fd = os.pipe()
-        pid = _fork_child(request, keep=(write_fd,), run=lambda: _write_all(write_fd, _run_program(env, request).to_bytes()))
+        pid = _fork_child(request, keep=(write_fd,), run=lambda: write_all(write_fd, _run_program(env, request).to_bytes()))
         os.close(write_fd)
         try:
             data = _read_reply(read_fd, deadline)
@@ -155,11 +155,6 @@ def _fork_child(request: EvalRequest, keep: tuple[int, ...], run: Callable[[], A
         os._exit(code)
 
 
-def _write_all(fd: int, data: bytes) -> None:
-    while data:
-        data = data[os.write(fd, data):]
-
-
 def _read_reply(fd: int, deadline: float) -> bytes | None:
     """The child's whole reply (up to end of file); None if the deadline passes first."""
     chunks, size = [], 0
@@ -216,7 +211,7 @@ def _confinement_report() -> bytes:
     if not pid:
         try:
             confinement = enter_sandbox((write_fd,), memory_mb=1024, cpu_seconds=10)
-            _write_all(write_fd, json.dumps(dataclasses.asdict(confinement)).encode())
+            write_all(write_fd, json.dumps(dataclasses.asdict(confinement)).encode())
         finally:
             os._exit(0)
     os.close(write_fd)
