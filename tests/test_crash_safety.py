@@ -5,7 +5,6 @@ import concurrent.futures
 import os
 import signal
 import threading
-import time
 
 from conftest import EXAMPLES, children_of, compose, same_outcome, wait_for
 
@@ -54,25 +53,34 @@ def test_a_request_that_keeps_losing_its_worker_fails_with_the_reason():
 
 
 def test_search_survives_workers_killed_at_random_moments(tmp_path):
+    kills = 3  # and as many retries, so that even one request killed every time is not lost
     cfg = compose(
-        "search", "search.max_samples=16", "gfo.budget=6", "task.episodes=3", "tracker=none",
+        "search", "search.max_samples=16", "gfo.budget=6", "task.episodes=3", "tracker=none", f"executor.max_retries={kills}",
         "executor.workers=2", "search.progress=false", "evaluation.episodes=3", "evaluation.render=false", "evaluation.simplify=false",
     )
     search = Search(cfg, tmp_path)
     killed = []
+    finished = threading.Event()
 
     def killer():
-        for delay in (1.0, 1.5, 2.0):
-            time.sleep(delay)
+        # Polls for a worker in mid-evaluation (however long a loaded machine takes to get
+        # there), kills it, and lets the search go on a while before the next kill.
+        while len(killed) < kills and not finished.is_set():
             busy = [pid for pid in search.executor.worker_pids() if children_of(pid)]
             if busy:
                 os.kill(busy[0], signal.SIGKILL)
                 killed.append(busy[0])
+                finished.wait(1.0)
+            else:
+                finished.wait(0.01)
 
     thread = threading.Thread(target=killer)
     thread.start()
-    summary = search.run()
-    thread.join()
+    try:
+        summary = search.run()
+    finally:
+        finished.set()
+        thread.join()
     assert killed, "no worker was running to kill"
     store = ProgramStore(tmp_path / "programs.db")
     records = [r for r in store.records() if r.sample >= 0]
