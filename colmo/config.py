@@ -47,6 +47,36 @@ def option(default: Any, help: str) -> Any:  # noqa: A002 - the documented name
 
 
 @dataclass
+class PerturbConfig:
+    """Model mismatch drawn per episode from the episode seed, for every `MujocoEnvironment`
+    (`colmo.environments.perturb`); every factor 0 (the default) is the nominal model.
+
+    Each relative magnitude `m` scales its model fields by factors drawn uniformly from
+    [1 - m, 1 + m] (one per body, dof, geom or actuator), from a random stream of their own, so
+    the nominal episode draws are untouched and every candidate meets the same perturbations."""
+
+    mass: float = option(0.0, "relative range of each body's mass and inertia (scaled together)")
+    damping: float = option(0.0, "relative range of each joint dof's damping")
+    frictionloss: float = option(0.0, "relative range of each joint dof's dry friction (frictionloss)")
+    friction: float = option(0.0, "relative range of each geom's friction coefficients")
+    gain: float = option(0.0, "relative range of each actuator's gain (and, for servos, its feedback gains)")
+    obs_noise: float = option(0.0, "standard deviation of Gaussian noise added to every observation entry, in its units")
+    action_noise: float = option(0.0, "standard deviation of Gaussian noise added to every action, relative to its control half-range")
+    delay: int = option(0, "control delay: each action is applied this many control steps late")
+
+    def __post_init__(self) -> None:
+        _at_least(self, "task.perturb", delay=0, obs_noise=0, action_noise=0)
+        for name in ("mass", "damping", "frictionloss", "friction", "gain"):
+            value = getattr(self, name)
+            _require(0 <= value < 1, f"task.perturb.{name} must be in [0, 1), got {value}")
+
+    @property
+    def active(self) -> bool:
+        """Whether anything differs from the nominal model."""
+        return any(getattr(self, name) for name in self.__dataclass_fields__)
+
+
+@dataclass
 class TaskConfig:
     """The control task: a spec file and how it is scored."""
 
@@ -55,6 +85,7 @@ class TaskConfig:
     episodes: int = option(10, "training episodes per score; their seeds derive from `seed`")
     target_score: Optional[float] = option(None, "reports count the samples needed to reach this score")
     env: dict[str, Any] = option({}, "keyword arguments for the spec's make_environment")
+    perturb: PerturbConfig = field(default_factory=PerturbConfig, metadata={"help": "per-episode model mismatch (default: none)"})
 
     def __post_init__(self) -> None:
         _at_least(self, "task", episodes=1)
@@ -324,7 +355,13 @@ class SimplifyConfig:
 class SearchLoopConfig:
     """The search loop's limits and display."""
 
-    max_samples: int = option(1000, "stop after this many generated programs, duplicates and failures included")
+    max_samples: int = option(
+        1000, "stop after this many model calls (generator requests' answers), duplicates, their regenerations and failures included",
+    )
+    duplicate_retries: int = option(
+        2, "a sample whose program was already evaluated is generated again, from another selection of the database "
+        "and with a fresh seed, up to this many times (each a model call) before it is recorded as a duplicate",
+    )
     max_seconds: float = option(0.0, "wall-clock limit of the whole search; 0: none")
     stop_at_score: Optional[float] = option(None, "stop once the best training score reaches this")
     queue_size: int = option(2, "batches in flight: generation overlaps evaluation")
@@ -332,7 +369,7 @@ class SearchLoopConfig:
     progress_every_s: float = option(30.0, "seconds between plain progress lines when stderr is not a terminal")
 
     def __post_init__(self) -> None:
-        _at_least(self, "search", max_samples=1, queue_size=1)
+        _at_least(self, "search", max_samples=1, queue_size=1, duplicate_retries=0)
         _require(self.max_seconds >= 0, f"search.max_seconds must be >= 0 (0 = no limit), got {self.max_seconds}")
         _above(self, "search", progress_every_s=0)
 

@@ -15,9 +15,13 @@ are grouped into islands and clusters, and which ones a prompt shows.
   evaluated, by the search).
 - Every `reset_every` samples the weaker half of the islands is emptied and each is re-seeded
   with the best program of a randomly chosen surviving island.
-- Programs are identified by their structure key (the code with its constants abstracted):
-  a structure already evaluated, successfully or not, is never evaluated again, so two
-  programs that differ only in their constants never both reach a prompt.
+- Programs are identified by a key (`identity`), and a key already evaluated, successfully
+  or not, is never evaluated again. With GFO the key is the structure key (the code with its
+  constants abstracted): the optimizer already searched that structure's constants, so two
+  programs that differ only in their constants never both reach a prompt. With `gfo=none`
+  the key is the program itself (its structure and its constants): constants are all that
+  search can change without GFO, so a program with new constants is a new program, as in
+  FunSearch and the paper's baseline.
 
 All randomness comes from `seed`. Selection and resets draw from two separate generators, so
 the island contents after replaying the same `register`/`mark_seen`/`on_sample` calls are the
@@ -28,6 +32,7 @@ program store without re-drawing its prompts.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import math
 from dataclasses import dataclass, field
 from typing import Any, Optional
@@ -35,12 +40,21 @@ from typing import Any, Optional
 import numpy as np
 
 from colmo.config import DatabaseConfig
-from colmo.program import measure
+from colmo.program import ParametricProgram, measure
+
+
+def identity(program: ParametricProgram, by_structure: bool) -> ParametricProgram:
+    """`program` keyed as the database tells programs apart: by its structure key (with GFO),
+    or by its structure and constants (`gfo=none`)."""
+    if by_structure:
+        return program
+    constants = hashlib.sha256(f"{program.key}{program.values!r}".encode()).hexdigest()
+    return dataclasses.replace(program, key=constants)
 
 
 @dataclass(frozen=True)
 class StoredProgram:
-    key: str  # structure key: programs differing only in their constants share it
+    key: str  # the program's `identity` key: with GFO, programs differing only in their constants share it
     code: str  # readable code with the tuned constants inlined (what prompts show)
     score: float  # finite: failed programs are never registered
     island: int

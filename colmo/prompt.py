@@ -3,7 +3,13 @@
 The selected programs appear as `policy_v0`, `policy_v1`, ... in ascending score, each with
 its tuned constants inlined, and the prompt ends with the header of the next version for the
 model to complete. Scores are not shown, as in the paper and FunSearch: the order alone says
-which program is better, and the model is asked for structure, not for numbers.
+which program is better.
+
+What the prompt says about constants is true of the run (`constants_tuned`): with GFO, both
+forms say that the numeric constants are tuned automatically, so the structure is what to
+change; without GFO (`gfo=none`, the programs run as written) nothing of the kind is said.
+Both forms ask for a version that differs from every one shown: small models otherwise
+copy the last version (most answers of a 1.5B model were copies, docs/llm-duplicates.md).
 
 Helpers the programs define (module-level functions, classes, constants) are shown once,
 above the versions. A helper that differs from one already shown under the same name, or
@@ -36,18 +42,33 @@ class Prompt:
     parent_keys: list[str]
 
 
-def _system_message(function_name: str, args: str) -> str:
+def _system_message(function_name: str, args: str, constants_tuned: bool) -> str:
+    tuning = (
+        " Its numeric constants are tuned automatically by an optimizer afterwards, so change the "
+        "structure (which terms, conditions and functions of the observation it uses), not the values."
+        if constants_tuned else ""
+    )
     return (
         "You are an expert control engineer who writes control policies as short Python functions. "
         f"Answer with one Python function `{function_name}({args})` in a ```python code block. "
-        "numpy is available as np; use only numpy and math. Improve the structure of the policy: "
-        "its numeric constants are tuned automatically by an optimizer afterwards, so focus on the "
-        "structure, not on the values."
+        f"numpy is available as np; use only numpy and math. Write a new policy, not a copy of one shown.{tuning}"
     )
 
 
-def build_prompt(description: str, selection: Selection, function_name: str = "policy") -> Prompt:
-    """The prompt showing `selection.programs` (ascending score) as `{function_name}_v0..`."""
+def _instructions(new: str, previous: str, function_name: str, constants_tuned: bool) -> str:
+    """What the completion form's docstring asks, after the task's description."""
+    lines = [
+        f"On every iteration, improve {previous} over the {function_name}_vX methods from previous iterations.",
+        f"{new} must differ from every version above.",
+    ]
+    if constants_tuned:
+        lines.append(f"The numeric constants of {new} are tuned automatically afterwards: change its structure, not its numbers.")
+    return "\n".join(lines)
+
+
+def build_prompt(description: str, selection: Selection, function_name: str = "policy", constants_tuned: bool = False) -> Prompt:
+    """The prompt showing `selection.programs` (ascending score) as `{function_name}_v0..`;
+    `constants_tuned`: whether the run tunes the constants of what the model writes (GFO)."""
     programs = selection.programs
     assert programs, "a prompt shows at least one program"
     assert all(math.isfinite(program.score) for program in programs), "failed programs are never shown"
@@ -55,17 +76,16 @@ def build_prompt(description: str, selection: Selection, function_name: str = "p
 
     imports, definitions, versions, args = _render([program.code for program in programs], function_name)
     new, previous = f"{function_name}_v{len(programs)}", f"{function_name}_v{len(programs) - 1}"
-    docstring = (
-        f'"""{description.strip()}\n\n'
-        f"On every iteration, improve {previous} over the {function_name}_vX methods from previous iterations.\n"
-        '"""'
-    )
+    docstring = f'"""{description.strip()}\n\n{_instructions(new, previous, function_name, constants_tuned)}\n"""'
     context = docstring + "\n\n" + "\n\n\n".join(["\n".join(imports), *definitions, *versions])
     header = f'def {new}({args}):\n    """Improved version of {previous}."""\n'
     # The chat form leaves out the header: the instruction asks for the function instead.
-    request = f"Write {new}, an improved version of {previous}. Name it `{function_name}` in your answer."
+    request = (
+        f"Write {new}, a new version that should score higher than {previous} and differs from every version above. "
+        f"Name it `{function_name}` in your answer."
+    )
     messages = [
-        {"role": "system", "content": _system_message(function_name, args)},
+        {"role": "system", "content": _system_message(function_name, args, constants_tuned)},
         {"role": "user", "content": f"```python\n{context}\n```\n\n{request}"},
     ]
     return Prompt(

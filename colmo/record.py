@@ -5,7 +5,8 @@ batch, `Summary` at the end), and who receives them (`SearchObserver`).
 A sample's status is one of:
 - `evaluated`: the program ran; `score` is the referee's mean return over the training episodes;
 - `failed`: the program was refused by the static check or failed when it ran (`failure` says how);
-- `duplicate`: its structure was evaluated before (programs differing only in constants);
+- `duplicate`: its program was evaluated before (with GFO: its structure, i.e. programs differing only
+  in constants; with `gfo=none`: the same code and constants), and so were its regenerations;
 - `unusable`: no program could be read from the generator's output (`failure` says why);
 - `interrupted`: the search stopped before the sample was evaluated; resume evaluates it.
 """
@@ -77,6 +78,7 @@ class SampleRecord:
     evaluation_seconds: float = 0.0
     prompt_tokens: int = 0
     completion_tokens: int = 0
+    model_calls: int = 1  # its answer and the duplicates generated before it (`search.duplicate_retries`)
     created: float = field(default_factory=time.time)
 
     @classmethod
@@ -91,7 +93,7 @@ class SampleRecord:
             sample=sample.index, batch=sample.batch, status=status, island=sample.island, parent_keys=tuple(sample.parent_keys),
             generator=generation.generator, raw=generation.text, prompt_prefix=generation.prefix,
             generation_seconds=generation.seconds, prompt_tokens=generation.prompt_tokens,
-            completion_tokens=generation.completion_tokens, failure=failure,
+            completion_tokens=generation.completion_tokens, model_calls=generation.calls, failure=failure,
         )
         if program is not None:
             fields.update(key=program.key, skeleton=program.skeleton, initial_params=tuple(program.values), n_params=program.n_params)
@@ -122,7 +124,7 @@ def busy_fractions(generation_seconds: float, evaluation_seconds: float, workers
 class Totals:
     """What a search has done so far, as both reports say it."""
 
-    samples: int
+    samples: int  # model calls: each answer, the regenerated duplicates included
     programs_evaluated: int
     duplicates_skipped: int
     failures: int
@@ -131,7 +133,7 @@ class Totals:
     evaluations: int
     steps: int  # control steps simulated
     valid_program_rate: float  # evaluated / (samples - duplicates - interrupted)
-    duplicate_rate: float
+    duplicate_rate: float  # answers that were duplicates, of all model calls
     tokens_per_second: float
     evaluations_per_second: float
     generator_busy: float  # fractions of the wall time
@@ -185,9 +187,12 @@ class Summary(Totals):
 
 @dataclass
 class Counters:
-    """Running totals over the samples integrated so far."""
+    """Running totals over the samples integrated so far; `samples` counts model calls, `records`
+    the stored samples (one per answer kept)."""
 
     samples: int = 0
+    records: int = 0
+    duplicate_answers: int = 0
     evaluated: int = 0
     duplicates: int = 0
     failures: int = 0
@@ -199,7 +204,9 @@ class Counters:
     generation_seconds: float = 0.0
 
     def count(self, record: SampleRecord) -> None:
-        self.samples += 1
+        self.samples += record.model_calls
+        self.records += 1
+        self.duplicate_answers += record.model_calls - 1 + (record.status == DUPLICATE)
         field_name = {EVALUATED: "evaluated", FAILED: "failures", DUPLICATE: "duplicates", UNUSABLE: "unusable", INTERRUPTED: "interrupted"}[record.status]
         setattr(self, field_name, getattr(self, field_name) + 1)
         self.evaluations += record.evaluations
@@ -211,12 +218,12 @@ class Counters:
     def valid_program_rate(self) -> float:
         """The share of new programs (duplicates and interrupted samples aside) that could be
         read, passed the static check and ran."""
-        judged = self.samples - self.duplicates - self.interrupted
+        judged = self.records - self.duplicates - self.interrupted
         return self.evaluated / judged if judged else 0.0
 
     @property
     def duplicate_rate(self) -> float:
-        return self.duplicates / self.samples if self.samples else 0.0
+        return self.duplicate_answers / self.samples if self.samples else 0.0
 
     @property
     def tokens_per_second(self) -> float:

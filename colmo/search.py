@@ -12,6 +12,11 @@ deterministic function of its seed whatever the timing. A batch is written to th
 as that is known: the store's sample numbers never have a gap, and a resumed run evaluates
 what was generated but not evaluated.
 
+A duplicate answer (a program evaluated before, by structure with GFO, by code and constants
+with `gfo=none`: `colmo.database.identity`) is generated again from another selection, up to
+`search.duplicate_retries` times, before it is recorded as a duplicate; `max_samples` and the
+counters count model calls, the regenerations included, so that samples mean model calls.
+
 Stopping: `search.max_samples`, `search.stop_at_score`, and `search.max_seconds`, a wall-clock
 limit: at the deadline a generation in flight is abandoned and programs in flight stop tuning
 at their next candidate, their best so far scored and stored (`cut_short`). Ctrl-C and SIGTERM
@@ -34,7 +39,7 @@ import numpy as np
 
 from colmo.best import BestPrograms, finish
 from colmo.config import SearchConfig
-from colmo.database import ProgramDatabase, StoredProgram
+from colmo.database import ProgramDatabase, StoredProgram, identity
 from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor, ExecutorClosed
 from colmo.executor import make_executor
@@ -44,7 +49,7 @@ from colmo.intake import Unusable, read_program
 from colmo.optimize import CandidateEvaluator, optimize_program
 from colmo.optimize.tune import calibrated
 from colmo.program import ParametricProgram, parametrize
-from colmo.prompt import build_prompt
+from colmo.prompt import Prompt, build_prompt
 from colmo.record import (
     DUPLICATE,
     FAILED,
@@ -171,7 +176,7 @@ class Search:
     def _starter(self) -> StoredProgram:
         starter = next((r for r in self.store.records() if r.sample == STARTER_SAMPLE), None)
         if starter is None:
-            program = parametrize(self.spec.starter_code)
+            program = self._identified(parametrize(self.spec.starter_code))
             sample = Sample(STARTER_SAMPLE, -1, -1, (), Generation(self.spec.starter_code, "spec"))
             starter = SampleRecord.of(sample, "", program, self._optimize(program, STARTER_SAMPLE))
             if starter.failure:
@@ -219,30 +224,24 @@ class Search:
     def _samples_left(self) -> int:
         return self.cfg.search.max_samples - self.counters.samples - self.in_flight_samples
 
+    def _prompt(self) -> Prompt:
+        return build_prompt(self.spec.description, self.database.select(), constants_tuned=self.cfg.gfo.method != "none")
+
     def _generate(self) -> Optional[_Batch]:
         """Generate the next batch and start evaluating it; None if the search is stopping."""
-        prompt = build_prompt(self.spec.description, self.database.select())
+        prompt = self._prompt()
         n = min(self.cfg.llm.batch_size, self._samples_left())
         started = time.perf_counter()
-        generating = self.generation_thread.submit(self.generator.generate, prompt, n)
-        while not generating.done():
-            if self._stop_requested():
-                generating.cancel()
-                self.generator.cancel()
-                return None
-            concurrent.futures.wait([generating], timeout=_POLL_S)
-        try:
-            generations = generating.result()
-        except GeneratorError as error:  # the batches in flight are still integrated
-            self.stop_reason = f"generator failed: {error}"
-            log.error("%s", self.stop_reason)
+        generations = self._generated(prompt, n)
+        if generations is None:
             return None
+        answers = self._regenerate_duplicates([(prompt, generation) for generation in generations], self._samples_left() - n)
         seconds = time.perf_counter() - started
         self.generation_seconds += seconds
         batch = _Batch(self.next_batch, seconds, time.perf_counter())
         samples = [
             Sample(self.next_sample + i, batch.index, prompt.island, tuple(prompt.parent_keys), generation)
-            for i, generation in enumerate(generations)
+            for i, (prompt, generation) in enumerate(answers)
         ]
         # Stored before any is evaluated (a full disk stops the search here, with no gap in the
         # store's sample numbers); a run that stops before their outcomes land evaluates them on resume.
@@ -251,24 +250,81 @@ class Search:
         self.next_sample += len(samples)
         for sample in samples:
             batch.outcomes.append(self._submit(sample))
-        self.in_flight_samples += len(batch.outcomes)
+        self.in_flight_samples += sum(sample.generation.calls for sample in samples)
         return batch
+
+    def _generated(self, prompt: Prompt, n: int) -> Optional[list[Generation]]:
+        """The generator's answers to `prompt`; None if the search is stopping or the generator failed."""
+        generating = self.generation_thread.submit(self.generator.generate, prompt, n)
+        while not generating.done():
+            if self._stop_requested():
+                generating.cancel()
+                self.generator.cancel()
+                return None
+            concurrent.futures.wait([generating], timeout=_POLL_S)
+        try:
+            return generating.result()
+        except GeneratorError as error:  # the batches in flight are still integrated
+            self.stop_reason = f"generator failed: {error}"
+            log.error("%s", self.stop_reason)
+            return None
+
+    def _regenerate_duplicates(self, answers: list[tuple[Prompt, Generation]], calls_left: int) -> list[tuple[Prompt, Generation]]:
+        """`answers` with each duplicate generated again, from a new selection of the database (a
+        fresh seed comes with every request), up to `search.duplicate_retries` times and within
+        `calls_left` model calls: a model's copy of a shown program would waste its turn. A
+        regenerated answer carries the calls, tokens and seconds of the ones it replaces."""
+        for _ in range(self.cfg.search.duplicate_retries):
+            repeated = self._duplicates(answers)[: max(calls_left, 0)]
+            if not repeated:
+                break
+            prompt = self._prompt()
+            fresh = self._generated(prompt, len(repeated))
+            if fresh is None:  # stopping: the answers so far are stored
+                break
+            calls_left -= len(fresh)
+            for i, generation in zip(repeated, fresh):
+                answers[i] = (prompt, generation.after(answers[i][1]))
+        return answers
+
+    def _duplicates(self, answers: list[tuple[Prompt, Generation]]) -> list[int]:
+        """The positions in `answers` whose program is known, or the same as an earlier answer's."""
+        keys: set[str] = set()
+        repeated = []
+        for i, (_, generation) in enumerate(answers):
+            try:
+                key = self._read(generation).key
+            except (Unusable, ForbiddenProgram):
+                continue
+            if self.database.is_known(key) or key in keys:
+                repeated.append(i)
+            keys.add(key)
+        return repeated
+
+    def _read(self, generation: Generation) -> ParametricProgram:
+        """The program of an answer, keyed as this run tells programs apart; `Unusable` or `ForbiddenProgram`."""
+        return self._identified(read_program(generation.text, self.spec.allowed_imports, generation.prefix, self.cfg.database.max_nodes))
+
+    def _identified(self, program: ParametricProgram) -> ParametricProgram:
+        """With GFO, programs that differ only in constants are one; with gfo=none, each set of constants is a program."""
+        return identity(program, by_structure=self.cfg.gfo.method != "none")
 
     def _reevaluate(self, records: list[SampleRecord]) -> _Batch:
         """The pending and interrupted samples of a resumed run, as a batch of their own."""
         batch = _Batch(records[0].batch, 0.0, time.perf_counter())
         for record in records:
             generation = Generation(
-                record.raw, record.generator, record.prompt_tokens, record.completion_tokens, record.generation_seconds, record.prompt_prefix
+                record.raw, record.generator, record.prompt_tokens, record.completion_tokens, record.generation_seconds, record.prompt_prefix,
+                record.model_calls,
             )
             batch.outcomes.append(self._submit(Sample(record.sample, record.batch, record.island, record.parent_keys, generation)))
-        self.in_flight_samples += len(batch.outcomes)
+        self.in_flight_samples += sum(record.model_calls for record in records)
         return batch
 
     def _submit(self, sample: Sample) -> concurrent.futures.Future:
         """Read the sample's program and start its evaluation; a future of its record."""
         try:
-            program = read_program(sample.generation.text, self.spec.allowed_imports, sample.generation.prefix, self.cfg.database.max_nodes)
+            program = self._read(sample.generation)
         except Unusable as error:
             return self._settled(SampleRecord.of(sample, UNUSABLE, failure=f"unusable output: {error}"))
         except ForbiddenProgram as error:
@@ -315,7 +371,7 @@ class Search:
         records = [outcome.result() for outcome in batch.outcomes]  # stored; an exception here is a bug or a full disk
         for record in records:
             self._apply(record)
-        self.in_flight_samples -= len(records)
+        self.in_flight_samples -= sum(record.model_calls for record in records)
         reset = self.database.on_sample(self.counters.samples)
         if reset:
             log.info("reset islands %s", reset)

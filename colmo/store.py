@@ -60,6 +60,9 @@ CREATE TABLE IF NOT EXISTS run (name TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS samples ({', '.join(column if name != 'sample' else 'sample INTEGER PRIMARY KEY' for name, column in _COLUMNS)});
 CREATE INDEX IF NOT EXISTS samples_key ON samples(key);
 """
+# Columns added since the first stores, with the value an older row means: a store written
+# before them is given them when it is opened (resumed or read), its rows keeping their meaning.
+_ADDED_COLUMNS = {"model_calls": "INTEGER NOT NULL DEFAULT 1"}  # one model call per sample then
 
 
 class StoreError(RunError):
@@ -76,6 +79,10 @@ class ProgramStore:
             self.connection.execute("PRAGMA journal_mode=WAL")
             self.connection.execute("PRAGMA synchronous=NORMAL")
             self.connection.executescript(_SCHEMA)
+            present = {row[1] for row in self.connection.execute("PRAGMA table_info(samples)")}
+            for name, column in _ADDED_COLUMNS.items():
+                if name not in present:
+                    self.connection.execute(f"ALTER TABLE samples ADD COLUMN {name} {column}")
             self.connection.commit()
         except sqlite3.DatabaseError as error:
             raise ConfigError(f"{self.path} is not a colmo program store ({error})") from None

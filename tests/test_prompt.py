@@ -19,6 +19,7 @@ EXPECTED = '''"""Balance the pole.
 Observation: [angle, velocity].
 
 On every iteration, improve policy_v1 over the policy_vX methods from previous iterations.
+policy_v2 must differ from every version above.
 """
 
 import numpy as np
@@ -54,10 +55,13 @@ def test_chat_messages_hold_the_same_programs_and_ask_for_the_next_version():
     prompt = build_prompt(DESCRIPTION, Selection(2, [LOW, HIGH]))
     assert [m["role"] for m in prompt.messages] == ["system", "user"]
     system, user = (m["content"] for m in prompt.messages)
-    for phrase in ("control engineer", "`policy(obs)`", "```python", "only numpy and math", "optimizer", "structure"):
+    for phrase in ("control engineer", "`policy(obs)`", "```python", "only numpy and math", "not a copy"):
         assert phrase in system
     context = EXPECTED[: EXPECTED.index("\n\n\ndef policy_v2")]
-    assert user == f"```python\n{context}\n```\n\nWrite policy_v2, an improved version of policy_v1. Name it `policy` in your answer."
+    assert user == (
+        f"```python\n{context}\n```\n\nWrite policy_v2, a new version that should score higher than policy_v1 and differs from every version above. "
+        "Name it `policy` in your answer."
+    )
 
 
 def test_pendulum_starter_from_the_database():
@@ -69,6 +73,7 @@ def test_pendulum_starter_from_the_database():
     assert prompt.text == (
         f'"""{spec.description}\n\n'
         "On every iteration, improve policy_v0 over the policy_vX methods from previous iterations.\n"
+        "policy_v1 must differ from every version above.\n"
         '"""\n\n'
         "import numpy as np\n\n\n"
         "def policy_v0(obs):\n    action = 0.0\n    return action\n\n\n"
@@ -225,3 +230,17 @@ def test_completion_stop_sequences_end_the_function_at_the_next_top_level_statem
     cut = min(body.index(stop) for stop in COMPLETION_STOP if stop in body)
     assert body[:cut] == "    return -obs[0]\n\n"
     assert len(COMPLETION_STOP) <= 4  # OpenAI's completions endpoint takes at most four
+
+
+def test_only_a_run_that_tunes_constants_says_so_in_both_forms():
+    """With GFO the model is told that constants are tuned and the structure is what to change;
+    with gfo=none (programs run as written) neither form says anything of the kind."""
+    plain = build_prompt(DESCRIPTION, Selection(2, [LOW, HIGH]), constants_tuned=False)
+    tuned = build_prompt(DESCRIPTION, Selection(2, [LOW, HIGH]), constants_tuned=True)
+    assert plain.text == EXPECTED
+    tuning = "The numeric constants of policy_v2 are tuned automatically afterwards: change its structure, not its numbers.\n"
+    assert tuned.text == EXPECTED.replace('above.\n"""', f'above.\n{tuning}"""', 1)
+    (plain_system, plain_user), (tuned_system, tuned_user) = ([m["content"] for m in p.messages] for p in (plain, tuned))
+    assert "optimizer" in tuned_system and "structure" in tuned_system and "tuned" in tuned_system
+    assert "optimizer" not in plain_system and "tuned" not in plain_system and "structure" not in plain_system
+    assert tuning.strip() in tuned_user and "tuned" not in plain_user

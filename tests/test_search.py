@@ -11,7 +11,10 @@ from collections import Counter
 import pytest
 from conftest import compose, run_colmo, start_colmo
 
+from colmo.generate import Generation, Generator
+from colmo.record import SampleRecord
 from colmo.search import Search
+from colmo.store import ProgramStore
 
 TINY = ("gfo.budget=4", "task.episodes=2", "tracker=none", "executor.workers=2", "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false")
 
@@ -28,13 +31,13 @@ def test_small_search_end_to_end(tmp_path):
     summary = json.loads((run_dir / "summary.json").read_text())
     for field in ("best_score", "samples", "programs_evaluated", "duplicates_skipped", "failures", "seconds", "best_so_far"):
         assert field in summary
-    assert summary["samples"] == 12
-    assert summary["programs_evaluated"] + summary["duplicates_skipped"] + summary["failures"] == 12
+    assert summary["samples"] == 12  # model calls, duplicates generated again included
+    rows = store_rows(run_dir)
+    assert summary["programs_evaluated"] + summary["duplicates_skipped"] + summary["failures"] == len(rows) - 1
     assert summary["best_so_far"][0][0] == 0 and summary["best_so_far"][-1][1] == summary["best_score"]
     best = (run_dir / "best_policy.py").read_text()
     assert "def policy(obs)" in best and f"{summary['best_score']:.2f}" in best
-    rows = store_rows(run_dir)
-    assert [r[0] for r in rows] == list(range(-1, 12))  # the starter, then every sample once
+    assert [r[0] for r in rows] == list(range(-1, len(rows) - 1))  # the starter, then every sample once
     assert f"best score {summary['best_score']:.2f}" in result.stdout
 
 
@@ -140,3 +143,66 @@ def test_default_search_swings_the_pendulum_up(tmp_path):
     summary = Search(cfg, tmp_path).run()
     assert summary.best_score >= 400, summary.best_so_far
     assert summary.stop_reason == "stop_at_score"
+
+
+STARTER_WITH = "import numpy as np\n\ndef policy(obs):\n    action = {}\n    return action\n"
+
+
+class ScriptedGenerator(Generator):
+    """Answers from a script, one per model call, whatever the prompt; counts the calls."""
+
+    def __init__(self, answers: list[str]):
+        super().__init__(cfg=None, seed=0)
+        self.answers, self.prompts = list(answers), []
+
+    def generate(self, prompt, n):
+        self.prompts.append(prompt)
+        return [Generation(self.answers.pop(0), "scripted", prompt_tokens=10, completion_tokens=5, seconds=0.5) for _ in range(n)]
+
+
+def scripted_search(tmp_path, answers, *overrides):
+    cfg = compose("search", f"search.max_samples={len(answers)}", "llm.batch_size=1", "search.queue_size=1", *TINY, *overrides)
+    generator = ScriptedGenerator(answers)
+    summary = Search(cfg, tmp_path / "run", generator=generator).run()
+    with sqlite3.connect(tmp_path / "run" / "programs.db") as connection:
+        rows = connection.execute("SELECT status, model_calls, prompt_tokens, completion_tokens, generation_seconds FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
+    return summary, rows, generator
+
+
+def test_gfo_none_evaluates_a_program_that_differs_from_a_known_one_only_in_its_constants(tmp_path):
+    """Without GFO, constants are all the search can change: the starter with another constant is a
+    new program. With GFO it is the starter's structure, whose constants were tuned already."""
+    answers = [STARTER_WITH.format(0.5)]
+    none, rows, _ = scripted_search(tmp_path / "none", answers, "gfo=none", "search.duplicate_retries=0")
+    assert [row[0] for row in rows] == ["evaluated"] and none.programs_evaluated == 1
+    tuned, rows, _ = scripted_search(tmp_path / "gfo", answers, "gfo=oneplusone", "search.duplicate_retries=0")
+    assert [row[0] for row in rows] == ["duplicate"] and tuned.programs_evaluated == 0
+
+
+def test_a_duplicate_answer_is_generated_again_and_every_model_call_counts(tmp_path):
+    answers = [STARTER_WITH.format(0.0), STARTER_WITH.format(0.0), STARTER_WITH.format("-np.sign(obs[2])")]
+    summary, rows, generator = scripted_search(tmp_path, answers, "search.duplicate_retries=2")
+    # One sample, made of three model calls: two copies of the starter thrown away, then a new program.
+    assert rows == [("evaluated", 3, 30, 15, pytest.approx(1.5))]
+    assert len(generator.prompts) == 3 and not generator.answers
+    assert summary.samples == 3 and summary.programs_evaluated == 1 and summary.duplicates_skipped == 0
+    assert summary.duplicate_rate == pytest.approx(2 / 3)
+    assert all("constants" in prompt.text and "tuned" in prompt.text for prompt in generator.prompts)  # gfo=oneplusone
+
+
+def test_duplicate_retries_are_bounded_then_the_duplicate_is_recorded(tmp_path):
+    answers = [STARTER_WITH.format(0.0)] * 2 + [STARTER_WITH.format("-np.sign(obs[2])")]
+    summary, rows, generator = scripted_search(tmp_path, answers, "search.duplicate_retries=1")
+    assert rows == [("duplicate", 2, 20, 10, pytest.approx(1.0)), ("evaluated", 1, 10, 5, pytest.approx(0.5))]
+    assert summary.samples == 3 and summary.duplicates_skipped == 1 and summary.duplicate_rate == pytest.approx(2 / 3)
+
+
+def test_a_store_written_before_model_calls_were_counted_opens_with_one_call_per_sample(tmp_path):
+    store = ProgramStore(tmp_path / "programs.db")
+    store.add(SampleRecord(sample=0, batch=0, status="duplicate", island=0, parent_keys=(), generator="old", raw="x"))
+    store.connection.execute("ALTER TABLE samples DROP COLUMN model_calls")  # the schema of older stores
+    store.close()
+    reopened = ProgramStore(tmp_path / "programs.db")
+    reopened.add(SampleRecord(sample=1, batch=1, status="duplicate", island=0, parent_keys=(), generator="new", raw="y", model_calls=3))
+    assert [(record.sample, record.model_calls) for record in reopened.records()] == [(0, 1), (1, 3)]
+    reopened.close()

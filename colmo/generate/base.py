@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import abc
+import dataclasses
 import importlib
 import logging
 import random
@@ -27,6 +28,16 @@ class Generation:
     completion_tokens: int = 0
     seconds: float = 0.0
     prefix: str = ""  # the prompt text the raw output continues; extraction reads prefix + text
+    # Model calls this answer cost: more than 1 when answers before it were duplicates, thrown
+    # away and generated again (their tokens and seconds are counted in the fields above).
+    calls: int = 1
+
+    def after(self, discarded: "Generation") -> "Generation":
+        """This answer, charged with the calls, tokens and seconds of a discarded one before it."""
+        return dataclasses.replace(
+            self, prompt_tokens=self.prompt_tokens + discarded.prompt_tokens, completion_tokens=self.completion_tokens + discarded.completion_tokens,
+            seconds=self.seconds + discarded.seconds, calls=self.calls + discarded.calls,
+        )
 
 
 class GeneratorError(RuntimeError):
