@@ -3,9 +3,9 @@
 An `Environment` is reset with an episode seed and stepped with an action; it returns
 `(reward, observation)`. `MujocoEnvironment` steps a compiled MuJoCo model directly,
 reproducing dm_control's `control.Environment` exactly (same reset, same sub-stepping,
-same observations) without its per-step Python bookkeeping. `evaluate_policy` runs a
-policy for a list of episode seeds and returns the per-episode returns, or the reason
-it failed; it never raises for anything the policy does. `episode_seeds` and `heldout_seeds`
+same observations) without its per-step Python bookkeeping. `evaluate_program` runs a
+fresh instance of a policy for each of a list of episode seeds and returns the per-episode
+returns, or the reason it failed; it never raises for anything the policy does. `episode_seeds` and `heldout_seeds`
 name the training and held-out episodes of a run.
 """
 
@@ -206,12 +206,23 @@ def rollout(env: Environment, policy: Policy, seed: int, steps: int | None = Non
 
 
 def evaluate_policy(env: Environment, policy: Policy, seeds: Sequence[int], steps: int | None = None, race: Race | None = None) -> Evaluation:
-    """Mean-return evaluation over `seeds`, in order; a failure in any episode fails the whole
-    evaluation; with `race`, the episodes stop once the candidate gives up (`Race.gives_up`)."""
+    """`evaluate_program` with one policy object for every episode: for trusted in-process
+    callers whose policy keeps no state."""
+    return evaluate_program(env, lambda seed: policy, seeds, steps, race)
+
+
+def evaluate_program(
+    env: Environment, new_policy: Callable[[int], Policy], seeds: Sequence[int], steps: int | None = None, race: Race | None = None,
+) -> Evaluation:
+    """Mean-return evaluation over `seeds`, in order, each episode run by the fresh policy that
+    `new_policy(seed)` makes (it raises `PolicyFailure` when it cannot); a failure in any
+    episode fails the whole evaluation; with `race`, the episodes stop once the candidate gives
+    up (`Race.gives_up`)."""
     returns: list[float] = []
     simulated = 0
     for seed in seeds:
         try:
+            policy = new_policy(seed)
             episode_return, episode_steps = rollout(env, policy, seed, steps)
         except PolicyFailure as failure:
             return Evaluation(tuple(returns), str(failure), simulated)

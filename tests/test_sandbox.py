@@ -18,7 +18,7 @@ from colmo.environments.pendulum import PendulumSwingup
 from colmo.evaluation import Evaluation
 from colmo.program import parametrize
 from colmo.sandbox import ForbiddenProgram, check_program
-from colmo.sandbox.namespace import load_policy
+from colmo.sandbox.namespace import Program, load_policy
 from colmo.task import PolicyFailure, as_action, evaluate_policy
 
 IMPORTS = ("numpy", "math")
@@ -178,7 +178,7 @@ def test_builtins_are_an_allowlist_and_print_is_silent(capsys):
 
 def test_numpy_is_a_copy_of_its_safe_public_api():
     np_ = namespace("")["np"]
-    assert np_ is not np and np_.sin is np.sin and np_.random.normal is np.random.normal
+    assert np_ is not np and np_.sin is np.sin and np_.random.normal is not np.random.normal  # see test_each_instance_draws_from_its_own_generator
     for name in ("linalg", "random", "fft", "emath"):
         assert getattr(np_, name).__name__.startswith("numpy.")
     for name in ("lib", "ma", "testing", "ctypeslib", "f2py", "core", "rec", "load", "save", "fromfile", "memmap", "info"):
@@ -199,7 +199,46 @@ def test_a_programs_monkeypatching_stays_in_its_own_copy():
     with pytest.raises(PolicyFailure, match="non-finite action"):
         as_action(float("nan"), 1)
     fresh = namespace("")
-    assert fresh["np"].isfinite is np.isfinite and fresh["np"].random.seed is np.random.seed and fresh["math"].pi == math.pi
+    assert fresh["np"].isfinite is np.isfinite and fresh["math"].pi == math.pi
+    assert isinstance(fresh["np"].random.seed.__self__, np.random.RandomState)
+
+
+def test_each_instance_draws_from_its_own_generator():
+    """An instance's np.random draws what the global generator seeded with its episode's seed
+    draws, whatever other instances or the evaluator draw in between (the referee steps
+    instances side by side), and leaves the global generator alone."""
+    program = Program("import numpy as np\ndef policy(obs):\n    return np.random.normal()\n", IMPORTS, ())
+    np.random.seed(7)
+    expected = [np.random.normal() for _ in range(3)]
+    first, second = program.new_policy(7), program.new_policy(7)
+    np.random.seed(1)
+    rows = [(first(None), second(None), np.random.normal()) for _ in range(3)]
+    assert [row[0] for row in rows] == [row[1] for row in rows] == expected
+    np.random.seed(1)
+    assert [np.random.normal() for _ in range(3)] != expected
+
+
+def test_every_instance_starts_from_the_module_code():
+    """State a policy keeps (function attribute, module global, mutable default) lives in one instance."""
+    program = Program("COUNT = [0]\ndef policy(obs, seen=[]):\n    seen.append(1)\n    COUNT[0] += 1\n"
+                      "    policy.calls += 1\n    return float(COUNT[0] + len(seen) + policy.calls)\npolicy.calls = 0\n", IMPORTS, ())
+    first = program.new_policy(0)
+    assert [first(None) for _ in range(3)] == [3.0, 6.0, 9.0]
+    assert program.new_policy(0)(None) == 3.0
+
+
+def test_a_failing_module_code_is_the_episodes_failure():
+    program = Program("import numpy as np\nif np.random.uniform() < 0.5:\n    raise ValueError('unlucky')\ndef policy(obs):\n    return 0.0\n", IMPORTS, ())
+    reasons = set()
+    for seed in range(20):
+        try:
+            program.new_policy(seed)
+            reasons.add(None)
+        except PolicyFailure as failure:
+            reasons.add(str(failure))
+    assert reasons == {None, "exception: ValueError: unlucky (at import)"}
+    with pytest.raises(PolicyFailure, match="^invalid: no callable `policy`"):
+        Program("x = 1\n", IMPORTS, ()).new_policy(0)
 
 
 def test_the_policy_gets_a_copy_of_the_observation():

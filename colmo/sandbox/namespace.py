@@ -2,10 +2,18 @@
 
 The program runs with an allowlist of builtins (`print` discards its output) and an
 `__import__` that hands out private copies of the allowed modules' public API, made afresh for
-every evaluation: whatever a program does to its `np`, the evaluator (which uses the real
+every episode: whatever a program does to its `np`, the evaluator (which uses the real
 numpy) never sees it. Copies are plain modules, so the policy's `np.sin` costs what it costs
 on numpy itself. Every evaluation also runs in a process that no earlier program touched
 (`colmo.sandbox.worker`), so these copies are a second line, not the only one.
+
+A `Program` is checked and compiled once; `Program.new_policy(seed)` runs its module code anew
+for each episode, so state a policy keeps (a function attribute, a module global, a closure, a
+mutable default) lives for one episode only: a score cannot depend on which episodes ran
+before in the same process, that is, on the worker count, the chunking, racing or the order of
+episodes. Each instance's `np.random` draws from a generator of its own, seeded with the
+episode's seed exactly as `np.random.seed(seed)` seeds the global one, so that instances
+stepped side by side (the referee's lockstep) draw what they would draw one after another.
 
 This module runs programs only inside sandbox worker processes; nothing here is called from
 the coordinator.
@@ -19,8 +27,11 @@ import sys
 import types
 from typing import Any, Callable, Sequence
 
+import numpy as np
+
 from colmo.errors import describe_exception
 from colmo.sandbox.check import NUMPY_SUBMODULES, ForbiddenProgram, attribute_allowed, check_tree, module_allowed, parse_program
+from colmo.task import PolicyFailure
 
 
 def _discard(*args: object, **kwargs: object) -> None:
@@ -106,8 +117,26 @@ def _copy_tree(template_module: types.ModuleType) -> types.ModuleType:
     return copy
 
 
-def _guarded_import(allowed: frozenset[str]) -> Callable[..., types.ModuleType]:
-    """`__import__` for one program: allowed modules only, as copies private to the program."""
+# numpy.random's module-level functions that are not bound methods of its global generator
+# but use it, and the generator's method each stands for.
+_GLOBAL_RANDOM_FUNCTIONS = {"seed": "seed", "ranf": "random_sample", "sample": "random_sample"}
+
+
+def _private_random(random_copy: types.ModuleType, seed: int) -> None:
+    """Bind a copy of `numpy.random` to a generator of its own, seeded as `np.random.seed(seed)`
+    seeds the global one (same draws), instead of the process's global generator."""
+    generator = np.random.RandomState(seed % 2**32)
+    global_generator = np.random.mtrand._rand
+    namespace = vars(random_copy)
+    for name, value in namespace.items():
+        if getattr(value, "__self__", None) is global_generator:
+            namespace[name] = getattr(generator, value.__name__)
+        elif name in _GLOBAL_RANDOM_FUNCTIONS:
+            namespace[name] = getattr(generator, _GLOBAL_RANDOM_FUNCTIONS[name])
+
+
+def _guarded_import(allowed: frozenset[str], seed: int) -> Callable[..., types.ModuleType]:
+    """`__import__` for one program instance: allowed modules only, as copies private to it."""
     copies: dict[str, types.ModuleType] = {}
 
     def import_(name: str, globals=None, locals=None, fromlist=(), level=0):  # noqa: A002 - mirrors __import__
@@ -116,33 +145,56 @@ def _guarded_import(allowed: frozenset[str]) -> Callable[..., types.ModuleType]:
         root = name.split(".")[0]
         if root not in copies or _submodule(copies[root], name) is None:
             copies[root] = _copy_tree(template(name))
+            if root == "numpy":
+                _private_random(copies[root].random, seed)
         return _submodule(copies[root], name) if fromlist else copies[root]
 
     return import_
 
 
+class Program:
+    """A checked, compiled program: `new_policy` runs its module code anew for each episode."""
+
+    def __init__(self, skeleton: str, allowed_imports: Sequence[str], params: Sequence[float]):
+        """Raises `ForbiddenProgram` for a refused program."""
+        tree = parse_program(skeleton)
+        check_tree(tree, allowed_imports)
+        self.code = compile(tree, "<policy>", "exec")  # the tree checked, not a second parse
+        self.allowed_imports = frozenset(allowed_imports)
+        self.params = tuple(params)
+
+    def load(self, seed: int = 0) -> Callable[..., object]:
+        """Run the module code in a fresh namespace of safe builtins and private module copies
+        (`np.random` seeded with `seed`), with `params` as its constants; return its `policy`.
+        Raises `ForbiddenProgram` for a policy-less program; whatever the module code raises
+        propagates."""
+        builtins_ = dict(_SAFE_BUILTINS, __import__=_guarded_import(self.allowed_imports, seed))
+        namespace = {"__builtins__": builtins_, "__name__": "policy_module", "params": self.params}
+        exec(self.code, namespace)
+        policy = namespace.get("policy")
+        if not callable(policy):
+            raise ForbiddenProgram("invalid: no callable `policy` in the program")
+        return policy
+
+    def new_policy(self, seed: int) -> Callable[..., object]:
+        """A fresh instance of the policy for the episode of `seed`; raises `PolicyFailure`
+        with the stored reason if the module code fails (an untrusted program's)."""
+        try:
+            return self.load(seed)
+        except ForbiddenProgram as error:
+            raise PolicyFailure(str(error)) from None
+        except BaseException as error:  # module-level code of an untrusted program
+            raise PolicyFailure(describe_exception(error, " (at import)")) from None
+
+
 def load_policy(skeleton: str, allowed_imports: Sequence[str], params: Sequence[float]) -> Callable[..., object]:
-    """Check the skeleton, run its module code in a fresh namespace of safe builtins and private
-    module copies with `params` as its constants, and return its `policy`. Raises
-    `ForbiddenProgram` for a refused or policy-less program; whatever the module code raises
-    propagates (the caller reports it)."""
-    tree = parse_program(skeleton)
-    check_tree(tree, allowed_imports)
-    code = compile(tree, "<policy>", "exec")  # the tree checked, not a second parse
-    builtins_ = dict(_SAFE_BUILTINS, __import__=_guarded_import(frozenset(allowed_imports)))
-    namespace = {"__builtins__": builtins_, "__name__": "policy_module", "params": tuple(params)}
-    exec(code, namespace)
-    policy = namespace.get("policy")
-    if not callable(policy):
-        raise ForbiddenProgram("invalid: no callable `policy` in the program")
-    return policy
+    """One instance of a program's policy (`Program.load`); for trusted in-process callers."""
+    return Program(skeleton, allowed_imports, params).load()
 
 
-def load_or_explain(skeleton: str, allowed_imports: Sequence[str], params: Sequence[float]) -> tuple[Callable[..., object] | None, str | None]:
-    """`load_policy`, with a failure turned into its stored reason: `(policy, None)` or `(None, reason)`."""
+def compile_or_explain(skeleton: str, allowed_imports: Sequence[str], params: Sequence[float]) -> tuple[Program | None, str | None]:
+    """`Program`, with a refusal turned into its stored reason: `(program, None)` or `(None, reason)`."""
     try:
-        return load_policy(skeleton, allowed_imports, params), None
+        return Program(skeleton, allowed_imports, params), None
     except ForbiddenProgram as error:
         return None, str(error)
-    except BaseException as error:  # module-level code of an untrusted program
-        return None, describe_exception(error, " (at import)")

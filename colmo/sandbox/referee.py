@@ -6,18 +6,29 @@ observations and returns actions, over two pipes. Whatever the child does to its
 of the Python-level checks included), it can change only the actions it sends, which is what a
 policy does anyway: the returns are computed here.
 
+The episodes of a request run in lockstep, in batches of up to `LOCKSTEP` episodes, each in
+its own copy of the environment, and the child holds one fresh program instance per episode
+(`Program.new_policy`), so one frame each way per control step serves a whole batch (a pipe
+round trip per step of the batch, not per step of each episode). Episodes are independent, so this returns what running them one after another
+returns: when episode k fails, the later ones are dropped and the earlier ones run on; the
+first failing episode in seed order fails the evaluation, and racing is decided on the returns
+in seed order.
+
 Wire format, both ways: frames of a tag byte, a payload length (4 bytes, little endian) and
-the payload. Worker to child: `E` + episode seed (int64) at each episode start, `O` + the
-observation (float64), `Q` to quit. Child to worker: `A` + the action (float64, exactly
-`action_size` values) or `F` + a failure reason (UTF-8), after which the child is done.
+the payload. Worker to child: `S` + a batch's first episode index (uint32) and its seeds
+(int64 each) at the batch's start, then per step `O` + the live episodes' indices (uint32
+each, ascending) and their observations (float64, one row each), and `Q` to quit. Child to worker, per `O`: an `F` frame (an episode index, uint32, and
+a failure reason, UTF-8) for each live episode whose policy failed, then `A` + the actions of
+the others, in order (float64, exactly `action_size` values each). Every write of the worker
+is bounded by the request's deadline: a child that stops reading cannot block it.
 
 With `trace` set, a request runs one episode, which the worker also records as it steps it
 (`colmo.trace.TraceRecorder`) and returns in `Evaluation.trace`: the recording is as
 trustworthy as the returns, since the child takes no part in it.
 
-The child mirrors `colmo.task.rollout`: the same global numpy seeding per episode, the same
-`act` (policy call and action check) and failure reasons, so a referee evaluation returns
-exactly what the fast path returns for an honest program.
+The child mirrors `colmo.task.rollout`: the same `act` (policy call and action check) and
+failure reasons, each instance's `np.random` seeded as rollout seeds the global one, so a
+referee evaluation returns exactly what the fast path returns for an honest program.
 """
 
 from __future__ import annotations
@@ -27,39 +38,54 @@ import os
 import select
 import struct
 import time
-from typing import Optional
+from typing import Callable, Sequence
 
 import numpy as np
 
 from colmo.errors import describe_exception, failure_reason
-from colmo.evaluation import EvalRequest, Evaluation
-from colmo.sandbox.namespace import load_or_explain
+from colmo.evaluation import EvalRequest, Evaluation, Race
+from colmo.sandbox.namespace import compile_or_explain
 from colmo.task import Environment, PolicyFailure, act
 from colmo.trace import MAX_STEPS, TraceError, TraceRecorder
 
 _HEADER = struct.Struct("<cI")
+_COUNT = struct.Struct("<I")  # an episode index or count
 _MAX_FRAME = 1 << 20
+LOCKSTEP = 16  # episodes stepped side by side: the environments the worker keeps per task
 
 
 class RefereeTimeout(Exception):
-    """The child did not answer before the evaluation's deadline."""
+    """The child did not answer, or did not read, before the evaluation's deadline."""
 
 
-def write_all(fd: int, data: bytes) -> None:
-    """Write all of `data` to the pipe `fd` (a write may take only part of it)."""
+def write_all(fd: int, data: bytes, deadline: float = math.inf) -> None:
+    """Write all of `data` to the pipe `fd` (a write may take only part of it); with a finite
+    `deadline`, `fd` is made non-blocking and `RefereeTimeout` is raised once it passes with
+    data still unwritten (the reader stopped reading)."""
+    if math.isinf(deadline):
+        while data:
+            data = data[os.write(fd, data):]
+        return
+    os.set_blocking(fd, False)
     while data:
-        data = data[os.write(fd, data):]
+        remaining = deadline - time.monotonic()
+        if remaining <= 0 or not select.select([], [fd], [], remaining)[1]:
+            raise RefereeTimeout
+        try:
+            data = data[os.write(fd, data):]
+        except BlockingIOError:  # another writer's bytes filled the pipe since the select
+            continue
 
 
 class _Channel:
-    """Frames over a pair of pipe descriptors, reads bounded by a deadline."""
+    """Frames over a pair of pipe descriptors, reads and writes bounded by a deadline."""
 
-    def __init__(self, read_fd: int, write_fd: int, deadline: float = float("inf")):
+    def __init__(self, read_fd: int, write_fd: int, deadline: float = math.inf):
         self.read_fd, self.write_fd, self.deadline = read_fd, write_fd, deadline
         self.buffer = b""
 
     def send(self, tag: bytes, payload: bytes = b"") -> None:
-        write_all(self.write_fd, _HEADER.pack(tag, len(payload)) + payload)
+        write_all(self.write_fd, _HEADER.pack(tag, len(payload)) + payload, self.deadline)
 
     def receive(self) -> tuple[bytes, bytes]:
         tag, length = _HEADER.unpack(self._read(_HEADER.size))
@@ -81,92 +107,170 @@ class _Channel:
 
 
 def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd: int) -> None:
-    """The child's side: load the program, then answer observations with actions until told
-    to quit or until the policy fails (then say why)."""
+    """The child's side: a fresh program instance per episode, then, for each step, the
+    actions of the live episodes (or why an episode's policy failed) until told to quit."""
     channel = _Channel(read_fd, write_fd)
-    policy, failure = load_or_explain(request.skeleton, request.allowed_imports, request.params)
-    if failure:
-        channel.send(b"F", failure.encode())
-        return
+    program, refusal = compile_or_explain(request.skeleton, request.allowed_imports, request.params)
+    policies: dict[int, Callable[..., object]] = {}
+    failures: list[tuple[int, str]] = []
     step = 0
     while True:
         try:
             tag, payload = channel.receive()
         except EOFError:
             return
-        if tag == b"E":
-            (seed,) = struct.unpack("<q", payload)
-            np.random.seed(seed % 2**32)
-            step = 0
-        elif tag == b"O":
-            try:
-                action = act(policy, np.frombuffer(payload, dtype=np.float64).copy(), action_size, step)
-            except PolicyFailure as failure:  # its text is the program's to choose (a type's name): bounded
-                channel.send(b"F", failure_reason(str(failure)).encode())
-                return
-            except BaseException as error:  # SystemExit and friends raised by the policy
-                channel.send(b"F", describe_exception(error, f" (step {step})").encode())
-                return
-            channel.send(b"A", action.tobytes())
-            step += 1
-        else:
+        if tag == b"S":  # a batch of episodes starts: one fresh instance each
+            (first,) = _COUNT.unpack_from(payload)
+            policies, failures, step = {}, [], 0
+            for index, seed in enumerate(np.frombuffer(payload, dtype="<i8", offset=_COUNT.size).tolist(), start=first):
+                try:
+                    if program is None:
+                        raise PolicyFailure(refusal)
+                    policies[index] = program.new_policy(seed)
+                except PolicyFailure as failure:
+                    failures.append((index, failure_reason(str(failure))))
+            continue
+        if tag != b"O":
             return
+        (count,) = _COUNT.unpack_from(payload)
+        live = np.frombuffer(payload, dtype="<u4", count=count, offset=_COUNT.size).tolist()
+        observations = np.frombuffer(payload, dtype=np.float64, offset=_COUNT.size + 4 * count).reshape(count, -1)
+        actions = []
+        for index, obs in zip(live, observations):
+            policy = policies.get(index)
+            if policy is None:  # failed at its instance's load, reported below
+                continue
+            try:
+                actions.append(act(policy, obs.copy(), action_size, step))
+            except PolicyFailure as failure:  # its text is the program's to choose (a type's name): bounded
+                failures.append((index, failure_reason(str(failure))))
+            except BaseException as error:  # SystemExit and friends raised by the policy
+                failures.append((index, describe_exception(error, f" (step {step})")))
+        for index, reason in failures:
+            policies.pop(index, None)
+            channel.send(b"F", _COUNT.pack(index) + reason.encode())
+        failures = []
+        channel.send(b"A", b"".join(action.tobytes() for action in actions))
+        step += 1
 
 
-def referee_evaluation(env: Environment, request: EvalRequest, read_fd: int, write_fd: int, deadline: float) -> Evaluation:
-    """The worker's side: run the episodes of `request`, asking the child for every action.
-    Raises `RefereeTimeout` past `deadline` and `EOFError` if the child stops answering.
-    With `request.trace`, the one episode of the request is recorded too (module docstring)."""
+class _Episodes:
+    """The worker's view of a request's episodes in lockstep: which still run, their returns
+    so far, and the failures that decide the evaluation."""
+
+    def __init__(self, count: int):
+        self.live = list(range(count))
+        self.totals = [0.0] * count
+        self.failures: dict[int, str] = {}
+
+    def fail(self, index: int, reason: str) -> None:
+        """Episode `index` failed: run as one after another, the episodes after it never start."""
+        self.failures[index] = reason
+        self.live = [other for other in self.live if other < index]
+
+    def evaluation(self, race: Race | None, simulated: int) -> Evaluation:
+        """What running the episodes one after another in seed order gives."""
+        returns: list[float] = []
+        for index, total in enumerate(self.totals):
+            if index in self.failures:
+                return Evaluation(tuple(returns), self.failures[index], simulated)
+            returns.append(total)
+            if race is not None and race.gives_up(returns):
+                return Evaluation(tuple(returns), None, simulated, raced_out=True)
+        return Evaluation(tuple(returns), None, simulated)
+
+
+def referee_evaluation(envs: Sequence[Environment], request: EvalRequest, read_fd: int, write_fd: int, deadline: float) -> Evaluation:
+    """The worker's side: run the episodes of `request` in lockstep, `len(envs)` at a time
+    (episode i in `envs[i % len(envs)]`), asking the child for all the live episodes' actions
+    at each step. Raises `RefereeTimeout` past `deadline` and `EOFError` if the child stops
+    answering. With `request.trace`, the one episode of the request is recorded too (module
+    docstring)."""
     recorder = None
     if request.trace:
-        if len(request.seeds) != 1 or (request.steps or env.horizon) > MAX_STEPS:
+        if len(request.seeds) != 1 or (request.steps or envs[0].horizon) > MAX_STEPS:
             return Evaluation(failure=f"invalid: a traced evaluation runs one episode of at most {MAX_STEPS} steps")
-        recorder = TraceRecorder(env)
+        recorder = TraceRecorder(envs[0])
     channel = _Channel(read_fd, write_fd, deadline)
-    returns: list[float] = []
+    episodes = _Episodes(len(request.seeds))
     simulated = 0
-    for seed in request.seeds:
-        np.random.seed(seed % 2**32)  # as rollout does, for any environment that draws from it
-        channel.send(b"E", struct.pack("<q", seed))
-        obs = env.reset(seed)
-        if recorder is not None:
-            recorder.start(obs)
-        total = 0.0
-        for _ in range(request.steps or env.horizon):
-            channel.send(b"O", np.asarray(obs, dtype=np.float64).tobytes())
-            action = _action(channel, env.action_size)
-            if isinstance(action, str):
-                return Evaluation(tuple(returns), action, simulated)
-            reward, obs = env.step(action)
-            if recorder is not None:
-                recorder.step(action, reward, obs)
-            total += reward
-            simulated += 1
-        try:
-            env.check_episode()
-        except PolicyFailure as failure:
-            return Evaluation(tuple(returns), str(failure), simulated)
-        returns.append(total)
-        if request.race is not None and request.race.gives_up(returns):
-            return Evaluation(tuple(returns), None, simulated, raced_out=True)
+    evaluation = episodes.evaluation(request.race, simulated)
+    for first in range(0, len(request.seeds), len(envs)):
+        batch = range(first, min(first + len(envs), len(request.seeds)))
+        episodes.live = list(batch)
+        simulated += _run_batch(channel, envs, request, episodes, recorder)
+        evaluation = episodes.evaluation(request.race, simulated)
+        if evaluation.failure is not None or evaluation.raced_out:
+            break
     channel.send(b"Q")
-    if recorder is None:
-        return Evaluation(tuple(returns), None, simulated)
+    if recorder is None or evaluation.failure is not None:
+        return evaluation
     try:
         trace = recorder.finish().to_dict()
     except TraceError as error:  # e.g. non-finite observations: nothing a renderer could draw
-        return Evaluation(tuple(returns), str(error), simulated)
-    return Evaluation(tuple(returns), None, simulated, trace=trace)
+        return Evaluation(evaluation.returns, str(error), simulated)
+    return Evaluation(evaluation.returns, None, simulated, trace=trace)
 
 
-def _action(channel: _Channel, action_size: int) -> np.ndarray | str:
-    """The child's next action, checked here (it comes from untrusted code), or its failure."""
-    tag, payload = channel.receive()
-    if tag == b"F":
-        return failure_reason(payload.decode("utf-8", errors="replace"))
-    action: Optional[np.ndarray] = None
-    if tag == b"A" and len(payload) == 8 * action_size:
-        action = np.frombuffer(payload, dtype=np.float64).copy()
-    if action is None or not np.isfinite(action).all():
-        return "tampering: the policy process sent a malformed action"
-    return action
+def _run_batch(channel: _Channel, envs: Sequence[Environment], request: EvalRequest, episodes: _Episodes, recorder: TraceRecorder | None) -> int:
+    """Run the episodes `episodes.live` (consecutive indices) side by side to their end or
+    failure; the control steps simulated."""
+    first = episodes.live[0]
+    seeds = [request.seeds[index] for index in episodes.live]
+    channel.send(b"S", _COUNT.pack(first) + np.asarray(seeds, dtype="<i8").tobytes())
+    observations: dict[int, np.ndarray] = {}
+    for index, seed in zip(episodes.live, seeds):
+        np.random.seed(seed % 2**32)  # as rollout does, for any environment that draws from it
+        observations[index] = np.asarray(envs[index % len(envs)].reset(seed), dtype=np.float64)
+    if recorder is not None:
+        recorder.start(observations[first])
+    action_size = envs[0].action_size
+    simulated = 0
+    for _ in range(request.steps or envs[0].horizon):
+        if not episodes.live:
+            break
+        live = episodes.live
+        header = _COUNT.pack(len(live)) + np.asarray(live, dtype="<u4").tobytes()
+        channel.send(b"O", header + b"".join(observations[index].tobytes() for index in live))
+        for index, action in _actions(channel, live, action_size, episodes).items():
+            if index not in episodes.live:  # a failure reported for an earlier episode dropped it
+                continue
+            reward, obs = envs[index % len(envs)].step(action)
+            if recorder is not None:
+                recorder.step(action, reward, obs)
+            observations[index] = np.asarray(obs, dtype=np.float64)
+            episodes.totals[index] += reward
+            simulated += 1
+    for index in episodes.live:
+        try:
+            envs[index % len(envs)].check_episode()
+        except PolicyFailure as failure:
+            episodes.fail(index, str(failure))
+    return simulated
+
+
+def _actions(channel: _Channel, live: list[int], action_size: int, episodes: _Episodes) -> dict[int, np.ndarray]:
+    """The child's actions for the `live` episodes, checked here (they come from untrusted
+    code); the failures it reports, and malformed answers, go to `episodes`."""
+    failed = set()
+    while True:
+        tag, payload = channel.receive()
+        if tag != b"F":
+            break
+        (index,) = _COUNT.unpack_from(payload) if len(payload) >= _COUNT.size else (-1,)
+        if index not in live or index in failed:
+            episodes.fail(live[0], "tampering: the policy process sent a malformed action")
+            return {}
+        failed.add(index)
+        episodes.fail(index, failure_reason(payload[_COUNT.size:].decode("utf-8", errors="replace")))
+    acting = [index for index in live if index not in failed]
+    if tag != b"A" or len(payload) != 8 * action_size * len(acting):
+        episodes.fail(live[0], "tampering: the policy process sent a malformed action")
+        return {}
+    actions = np.frombuffer(payload, dtype=np.float64).reshape(len(acting), action_size)
+    checked = {}
+    for index, action in zip(acting, actions):
+        if not np.isfinite(action).all():
+            episodes.fail(index, "tampering: the policy process sent a malformed action")
+        checked[index] = action.copy()
+    return checked

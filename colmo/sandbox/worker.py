@@ -38,9 +38,9 @@ from typing import Any, Callable
 from colmo.errors import describe_exception
 from colmo.evaluation import FAST, REFEREE, EvalRequest, Evaluation
 from colmo.sandbox.confine import enter_sandbox
-from colmo.sandbox.namespace import load_or_explain, template
-from colmo.sandbox.referee import RefereeTimeout, referee_evaluation, serve_policy, write_all
-from colmo.task import Environment, evaluate_policy
+from colmo.sandbox.namespace import compile_or_explain, template
+from colmo.sandbox.referee import LOCKSTEP, RefereeTimeout, referee_evaluation, serve_policy, write_all
+from colmo.task import Environment, evaluate_program
 
 _PR_SET_PDEATHSIG = 1
 _CLONE_NEWUSER, _CLONE_NEWNET = 0x10000000, 0x40000000
@@ -58,22 +58,28 @@ class Worker:
     """What a worker keeps between requests: simulators by (spec, options), and module templates."""
 
     def __init__(self) -> None:
-        self.environments: dict[tuple, Environment] = {}
+        self.environments: dict[tuple, list[Environment]] = {}
 
-    def environment(self, request: EvalRequest) -> Environment:
+    def environments_for(self, request: EvalRequest) -> list[Environment]:
+        """The simulators of `request`: one for a fast request, whose child runs the episodes one
+        after another, one per episode of a lockstep batch for a referee request (`colmo.sandbox.referee`)."""
         key = (request.spec, request.env)
-        if key not in self.environments:
+        envs = self.environments.setdefault(key, [])
+        count = min(max(len(request.seeds), 1), LOCKSTEP) if request.mode == REFEREE else 1
+        if len(envs) < count:
             from colmo.spec import load_spec
 
-            self.environments[key] = load_spec(request.spec).make_environment(**dict(request.env))
-        env = self.environments[key]
-        for seed in request.seeds:  # initial states, computed once here and inherited by every child
-            env.reset(seed)
-        return env
+            spec = load_spec(request.spec)
+            envs.extend(spec.make_environment(**dict(request.env)) for _ in range(count - len(envs)))
+        envs = envs[:count]
+        # Initial states, computed once here and inherited by every child (fast) or reused (referee).
+        for index, seed in enumerate(request.seeds):
+            envs[index % len(envs)].reset(seed)
+        return envs
 
     def evaluate(self, request: EvalRequest) -> Evaluation:
         try:
-            env = self.environment(request)
+            envs = self.environments_for(request)
             for name in request.allowed_imports:
                 template(name)
         except Exception as error:  # the spec is the user's, not the program's: say so
@@ -83,9 +89,9 @@ class Worker:
         start = time.monotonic()
         deadline = start + request.timeout_s
         if request.mode == REFEREE:
-            evaluation = self._referee(env, request, deadline)
+            evaluation = self._referee(envs, request, deadline)
         elif request.mode == FAST:
-            evaluation = self._fast(env, request, deadline)
+            evaluation = self._fast(envs[0], request, deadline)
         else:
             evaluation = Evaluation(failure=f"invalid: unknown evaluation mode {request.mode!r}")
         return dataclasses.replace(evaluation, seconds=time.monotonic() - start)
@@ -106,16 +112,16 @@ class Worker:
         except ValueError:
             return Evaluation(failure="crash: the evaluation process sent a malformed reply")
 
-    def _referee(self, env: Environment, request: EvalRequest, deadline: float) -> Evaluation:
+    def _referee(self, envs: list[Environment], request: EvalRequest, deadline: float) -> Evaluation:
         observations_read, observations_write = os.pipe()  # worker -> child
         actions_read, actions_write = os.pipe()  # child -> worker
-        serve = lambda: serve_policy(request, env.action_size, observations_read, actions_write)  # noqa: E731
+        serve = lambda: serve_policy(request, envs[0].action_size, observations_read, actions_write)  # noqa: E731
         pid = _fork_child(request, keep=(observations_read, actions_write), run=serve)
         os.close(observations_read)
         os.close(actions_write)
         evaluation, timed_out = None, False
         try:
-            evaluation = referee_evaluation(env, request, actions_read, observations_write, deadline)
+            evaluation = referee_evaluation(envs, request, actions_read, observations_write, deadline)
         except RefereeTimeout:
             timed_out = True
         except (EOFError, OSError, ValueError):  # the child died or broke the protocol
@@ -130,12 +136,12 @@ class Worker:
 
 
 def _run_program(env: Environment, request: EvalRequest) -> Evaluation:
-    """In the child: the program's fast-path evaluation."""
-    policy, failure = load_or_explain(request.skeleton, request.allowed_imports, request.params)
-    if failure:
-        return Evaluation(failure=failure)
+    """In the child: the program's fast-path evaluation, a fresh program instance per episode."""
+    program, refusal = compile_or_explain(request.skeleton, request.allowed_imports, request.params)
+    if program is None:
+        return Evaluation(failure=refusal)
     try:
-        return evaluate_policy(env, policy, request.seeds, request.steps, request.race)
+        return evaluate_program(env, program.new_policy, request.seeds, request.steps, request.race)
     except BaseException as error:  # SystemExit and friends raised by the policy
         return Evaluation(failure=describe_exception(error))
 
