@@ -377,8 +377,9 @@ class Search:
             log.info("reset islands %s", reset)
         report = self._report(batch)
         log.info(
-            "batch %d: samples %d, best %.2f, gen %.1f s, eval %.1f s, evals/s %.1f",
-            batch.index, report.samples, report.best_score, report.generation_seconds, report.evaluation_seconds, report.evaluations_per_second,
+            "batch %d: samples %d, programs evaluated %d, best %.2f, gen %.1f s, eval %.1f s, evals/s %.1f",
+            batch.index, report.samples, report.programs_evaluated, report.best_score,
+            report.generation_seconds, report.evaluation_seconds, report.evaluations_per_second,
         )
         for observer in self.observers:
             observer.on_batch(report, records)
