@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from colmo.environments.perturb import perturbable
 from colmo.task import Environment
 
 DEFAULT_IMPORTS = ("numpy", "math")
@@ -84,7 +85,8 @@ def load_spec(name_or_path: str) -> Spec:
     if not callable(make_environment):
         raise SpecError(f"{path}: the spec file needs a `make_environment(**options)` function")
     allowed = tuple(dict.fromkeys(DEFAULT_IMPORTS + tuple(getattr(module, "ALLOWED_IMPORTS", ()))))
-    return Spec(path.stem, path, description, starter, make_environment, allowed)
+    # Any MuJoCo spec takes `task.perturb` through the reserved option, unknown to its make_environment.
+    return Spec(path.stem, path, description, starter, perturbable(make_environment), allowed)
 
 
 def load_task_spec(name_or_path: str) -> Spec:

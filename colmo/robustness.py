@@ -1,0 +1,122 @@
+"""Robustness report: a policy's score over a grid of model-mismatch magnitudes.
+
+Each relative factor of `colmo.config.PerturbConfig` (mass and inertia, damping, dry friction,
+geom friction, actuator gain, observation and action noise) is raised alone to each magnitude,
+then all of them together; the control delay, counted in steps rather than as a fraction, has
+its own short grid. Every point is scored by the caller's `score` (the referee on held-out
+episodes, in `colmo-evaluate robustness=true`) on the same episode seeds, whose perturbation
+draws differ only in scale from one magnitude to the next, so the curves are paired and the
+report is a deterministic function of the policy and the seeds. This module knows no front end.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Optional, Sequence
+
+from colmo.config import PerturbConfig
+from colmo.evaluation import Evaluation
+
+FACTORS = ("mass", "damping", "frictionloss", "friction", "gain", "obs_noise", "action_noise")
+ALL = "all"
+
+
+@dataclass(frozen=True)
+class Point:
+    """One scored perturbation: which factor (or `all`, or `delay`), how large, the outcome."""
+
+    factor: str
+    magnitude: float
+    evaluation: Evaluation
+
+    @property
+    def score(self) -> Optional[float]:
+        return None if self.evaluation.failure else self.evaluation.score
+
+
+@dataclass(frozen=True)
+class RobustnessReport:
+    nominal: Evaluation
+    magnitudes: tuple[float, ...]  # the nonzero relative magnitudes
+    points: tuple[Point, ...]  # every factor at every magnitude, then `all`, then the delays
+    delays: tuple[int, ...]
+
+    def score(self, factor: str, magnitude: float) -> Optional[float]:
+        return next(p.score for p in self.points if p.factor == factor and p.magnitude == magnitude)
+
+    def entries(self) -> list[dict]:
+        """One entry per magnitude, nominal (0) first: the score of each factor and of all
+        together; then one entry per delay (`delay_steps`)."""
+        nominal = None if self.nominal.failure else self.nominal.score
+        rows = [{"magnitude": 0.0, **{name: nominal for name in (*FACTORS, ALL)}}]
+        rows += [{"magnitude": m, **{name: self.score(name, m) for name in (*FACTORS, ALL)}} for m in self.magnitudes]
+        return rows
+
+    def delay_entries(self) -> list[dict]:
+        nominal = None if self.nominal.failure else self.nominal.score
+        return [{"delay_steps": 0, "score": nominal}] + [{"delay_steps": k, "score": self.score("delay", k)} for k in self.delays]
+
+    def failures(self) -> list[str]:
+        return [f"{p.factor} {p.magnitude:g}: {p.evaluation.failure}" for p in self.points if p.evaluation.failure]
+
+
+def robustness_report(
+    score: Callable[[PerturbConfig], Evaluation], magnitudes: Sequence[float], delays: Sequence[int] = (),
+) -> RobustnessReport:
+    """Score the nominal model, every factor alone and all together at each of `magnitudes`,
+    and each control delay of `delays` steps."""
+    magnitudes = tuple(sorted({float(m) for m in magnitudes if m > 0}))
+    points = [Point(name, m, score(PerturbConfig(**{name: m}))) for name in FACTORS for m in magnitudes]
+    points += [Point(ALL, m, score(PerturbConfig(**{name: m for name in FACTORS}))) for m in magnitudes]
+    delays = tuple(sorted({int(k) for k in delays if k > 0}))
+    points += [Point("delay", k, score(PerturbConfig(delay=k))) for k in delays]
+    return RobustnessReport(score(PerturbConfig()), magnitudes, tuple(points), delays)
+
+
+def _cell(value: Optional[float]) -> str:
+    return "failed" if value is None or not math.isfinite(value) else f"{value:.1f}"
+
+
+def table(report: RobustnessReport) -> str:
+    """The scores as a plain-text table: one row per magnitude, one column per factor."""
+    names = (*FACTORS, ALL)
+    lines = ["magnitude " + " ".join(f"{name:>12}" for name in names)]
+    for entry in report.entries():
+        lines.append(f"{entry['magnitude']:>9.0%} " + " ".join(f"{_cell(entry[name]):>12}" for name in names))
+    if report.delays:
+        lines.append("delay (steps) " + " ".join(f"{e['delay_steps']:>3}: {_cell(e['score'])}" for e in report.delay_entries()))
+    return "\n".join(lines)
+
+
+def save(report: RobustnessReport, directory: Path, title: str) -> list[Path]:
+    """Write `robustness.json`, `robustness.csv` and `robustness.png` (score against magnitude,
+    one line per factor; the delay grid in a second panel) into `directory`."""
+    from matplotlib.figure import Figure
+
+    directory.mkdir(parents=True, exist_ok=True)
+    paths = [directory / "robustness.json", directory / "robustness.csv", directory / "robustness.png"]
+    paths[0].write_text(json.dumps({"robustness": report.entries(), "delay": report.delay_entries()}, indent=1) + "\n")
+    with paths[1].open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(["factor", "magnitude", "score"])
+        for entry in report.entries():
+            writer.writerows([name, entry["magnitude"], entry[name]] for name in (*FACTORS, ALL))
+        writer.writerows(["delay_steps", e["delay_steps"], e["score"]] for e in report.delay_entries()[1:])
+    figure = Figure(figsize=(10, 4), layout="constrained")
+    axes, delay_axes = figure.subplots(1, 2, width_ratios=(3, 1))
+    entries = report.entries()
+    x = [100 * e["magnitude"] for e in entries]
+    for name in (*FACTORS, ALL):
+        y = [math.nan if e[name] is None else e[name] for e in entries]
+        axes.plot(x, y, marker="o", label=name, linewidth=2.5 if name == ALL else 1.2, color="black" if name == ALL else None)
+    axes.set(xlabel="perturbation magnitude (%)", ylabel="held-out score", title=title)
+    axes.legend(fontsize="small")
+    delay = report.delay_entries()
+    delay_axes.plot([e["delay_steps"] for e in delay], [math.nan if e["score"] is None else e["score"] for e in delay], marker="o")
+    delay_axes.set(xlabel="control delay (steps)", title="delay")
+    figure.savefig(paths[2], dpi=100)
+    return paths
