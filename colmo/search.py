@@ -40,6 +40,7 @@ import numpy as np
 from colmo.best import BestPrograms, finish
 from colmo.config import SearchConfig
 from colmo.database import ProgramDatabase, StoredProgram, identity
+from colmo.environments.perturb import with_perturbation
 from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor, ExecutorClosed
 from colmo.executor import make_executor
@@ -130,7 +131,8 @@ class Search:
             try:
                 if not self._wants_probe():  # a generator that cannot start ends the run before any work
                     self._start_generator()
-                provisional = Evaluator.for_task(self.spec, self.cfg.task.env, self.seeds, self.cfg.executor.memory_mb)
+                options = with_perturbation(self.cfg.task.env, self.cfg.task.perturb)  # training under task.perturb
+                provisional = Evaluator.for_task(self.spec, options, self.seeds, self.cfg.executor.memory_mb)
                 self.evaluator = calibrated(self.executor, provisional, parametrize(self.spec.starter_code), self.cfg.executor.timeout_s)
                 self.database = ProgramDatabase(self.cfg.database, self._starter(), self.cfg.seed)
                 self.best_so_far = [(0, self.database.best.score)]
