@@ -1,0 +1,118 @@
+"""Model mismatch (`task.perturb`) and the robustness report of `colmo-evaluate robustness=true`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import last_json_line, run_colmo
+
+from colmo.config import PerturbConfig
+from colmo.environments.perturb import PerturbedEnvironment, with_perturbation
+from colmo.errors import ConfigError
+from colmo.spec import load_spec
+from colmo.task import episode_seeds, evaluate_policy
+
+SEEDS = episode_seeds(3, 3)
+STEPS = 150
+ACTIONS = np.random.default_rng(7).uniform(-1, 1, (STEPS, 1))  # one fixed open-loop action sequence
+EVERYTHING = PerturbConfig(mass=0.3, damping=0.3, frictionloss=0.3, friction=0.3, gain=0.3, obs_noise=0.05, action_noise=0.1)
+
+
+def pendulum(perturb: PerturbConfig | None = None):
+    options = {} if perturb is None else with_perturbation({}, perturb)
+    return load_spec("pendulum.py").make_environment(**options)
+
+
+def trajectory(env, seed: int, actions: np.ndarray = ACTIONS) -> np.ndarray:
+    """Observations of one episode under `actions`, its end included (which restores the model)."""
+    observations = [env.reset(seed)]
+    observations += [env.step(action)[1] for action in actions]
+    env.check_episode()
+    return np.array(observations)
+
+
+def swing(obs: np.ndarray) -> float:
+    """The paper's pendulum policy (examples/paper_pendulum.py): it earns reward a perturbation changes."""
+    angle = np.arctan2(-obs[1], obs[0])
+    return float(np.sign(obs[2]) if abs(angle) > np.pi / 6.512 else 9.437 * np.sin(angle) - 2.746 * obs[2])
+
+
+def test_perturbation_off_leaves_the_environment_and_its_scores_untouched():
+    assert with_perturbation({"angle_bound": 0.3}, PerturbConfig()) == {"angle_bound": 0.3}
+    assert not isinstance(pendulum(PerturbConfig()), PerturbedEnvironment)
+    nominal = evaluate_policy(pendulum(), swing, SEEDS)
+    assert nominal.score > 0
+    # The wrapper itself at magnitude 0 (every factor drawn, each exactly 1) changes no bit either.
+    zero = PerturbedEnvironment(pendulum(), PerturbConfig())
+    assert evaluate_policy(zero, swing, SEEDS).returns == nominal.returns
+    assert np.array_equal(trajectory(zero, SEEDS[0]), trajectory(pendulum(), SEEDS[0]))
+
+
+def test_perturbed_episodes_are_deterministic_per_seed_and_differ_from_nominal():
+    nominal = trajectory(pendulum(), SEEDS[0])
+    first = trajectory(pendulum(EVERYTHING), SEEDS[0])
+    again = trajectory(pendulum(EVERYTHING), SEEDS[0])
+    assert np.array_equal(first, again)
+    assert not np.allclose(first, nominal)
+    # The environment's own draw (the initial angle) is untouched: only noise separates the first observations.
+    assert np.allclose(first[0], nominal[0], atol=0.5)
+    assert not np.allclose(trajectory(pendulum(EVERYTHING), SEEDS[1]), first)
+    # One environment replaying a seed after another seed's episode gives the same episode.
+    env = pendulum(EVERYTHING)
+    trajectory(env, SEEDS[1])
+    assert np.array_equal(trajectory(env, SEEDS[0]), first)
+
+
+@pytest.mark.parametrize("factor", ["mass", "damping", "gain", "obs_noise", "action_noise"])
+def test_each_factor_alone_changes_the_episode(factor):
+    alone = PerturbConfig(**{factor: 0.3})
+    assert not np.allclose(trajectory(pendulum(alone), SEEDS[0]), trajectory(pendulum(), SEEDS[0]))
+
+
+def test_the_model_is_perturbed_during_the_episode_and_restored_after_it():
+    fields = ("body_mass", "body_inertia", "dof_damping", "geom_friction", "actuator_gainprm", "actuator_biasprm")
+    env = load_spec("quadruped.py").make_environment(**with_perturbation({}, EVERYTHING))
+    nominal = {name: getattr(env.model, name).copy() for name in fields}
+    env.reset(SEEDS[0])
+    during = {name: getattr(env.model, name).copy() for name in fields}
+    for _ in range(3):
+        env.step(np.zeros(env.action_size))
+    env.check_episode()
+    for name in fields:
+        assert not np.array_equal(during[name], nominal[name]), name
+        assert np.array_equal(getattr(env.model, name), nominal[name]), name
+
+
+def test_a_delay_of_k_steps_applies_each_action_k_steps_late():
+    k = 3
+    delayed = trajectory(pendulum(PerturbConfig(delay=k)), SEEDS[0])
+    # The pendulum's actuators hold their reset control, 0, until the first action arrives.
+    shifted = np.concatenate((np.zeros((k, 1)), ACTIONS[:-k]))
+    assert np.array_equal(delayed, trajectory(pendulum(), SEEDS[0], shifted))
+
+
+def test_out_of_range_magnitudes_are_configuration_errors():
+    with pytest.raises(ConfigError, match="task.perturb.mass"):
+        PerturbConfig(mass=1.0)
+    with pytest.raises(ConfigError, match="task.perturb.delay"):
+        PerturbConfig(delay=-1)
+
+
+def test_colmo_evaluate_robustness_reports_each_magnitude_nominal_first_and_repeats(tmp_path, examples):
+    overrides = (
+        "task=pendulum", f"policy_file={examples / 'paper_pendulum.py'}", "robustness=true", "episodes=2",
+        "robustness_episodes=2", "robustness_magnitudes=[0.1,0.4]", "robustness_delays=[2]",
+    )
+    results = []
+    for _ in range(2):
+        run = run_colmo("colmo.evaluate", *overrides, cwd=tmp_path, timeout=600)
+        assert run.returncode == 0, run.stderr[-2000:]
+        results.append(last_json_line(run.stdout))
+    first, second = results
+    assert [entry["magnitude"] for entry in first["robustness"]] == [0.0, 0.1, 0.4]
+    assert [entry["delay_steps"] for entry in first["delay"]] == [0, 2]
+    assert first["robustness"] == second["robustness"] and first["delay"] == second["delay"]
+    nominal = first["robustness"][0]
+    assert len({nominal[factor] for factor in nominal if factor != "magnitude"}) == 1
+    assert first["robustness"][2]["all"] != nominal["all"]
+    assert "magnitude" in run.stdout and len(list(tmp_path.rglob("robustness.png"))) == 2
