@@ -195,7 +195,9 @@ def open_run(run_dir: Path, settings: Mapping[str, Any], resume: bool) -> tuple[
 def run_settings(cfg: "SearchConfig") -> dict[str, Any]:
     """The settings a run's scores depend on; a resumed run must keep them."""
     gfo = {f"gfo.{name}": value for name, value in asdict(cfg.gfo).items()}
-    return {"task": cfg.task.name, "seed": cfg.seed, "task.episodes": cfg.task.episodes, "task.env": cfg.task.env, **gfo}
+    # Only when on, so that runs from before task.perturb existed still resume.
+    perturb = {"task.perturb": asdict(cfg.task.perturb)} if cfg.task.perturb.active else {}
+    return {"task": cfg.task.name, "seed": cfg.seed, "task.episodes": cfg.task.episodes, "task.env": cfg.task.env, **perturb, **gfo}
 
 
 def check_settings(run_dir: Path, recorded: Mapping[str, Any], settings: Mapping[str, Any]) -> None:

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import last_json_line, run_colmo
+from conftest import compose, last_json_line, run_colmo
 
 from colmo.config import PerturbConfig
 from colmo.environments.perturb import PerturbedEnvironment, with_perturbation
 from colmo.errors import ConfigError
 from colmo.spec import load_spec
+from colmo.store import run_settings
 from colmo.task import episode_seeds, evaluate_policy
 
 SEEDS = episode_seeds(3, 3)
@@ -116,3 +117,9 @@ def test_colmo_evaluate_robustness_reports_each_magnitude_nominal_first_and_repe
     assert len({nominal[factor] for factor in nominal if factor != "magnitude"}) == 1
     assert first["robustness"][2]["all"] != nominal["all"]
     assert "magnitude" in run.stdout and len(list(tmp_path.rglob("robustness.png"))) == 2
+
+
+def test_a_search_under_a_perturbation_is_a_run_of_its_own():
+    nominal, perturbed = run_settings(compose("search")), run_settings(compose("search", "task.perturb.mass=0.2"))
+    assert "task.perturb" not in nominal  # runs from before task.perturb existed still resume
+    assert perturbed["task.perturb"]["mass"] == 0.2 and perturbed != nominal
