@@ -33,8 +33,10 @@ The result is formatted by ast.unparse, which drops comments; the caller keeps t
 from __future__ import annotations
 
 import ast
+import bisect
 import math
 import re
+from typing import Iterator
 
 from colmo.astutil import bindings, bound_names, rename
 
@@ -43,6 +45,16 @@ _FENCE = re.compile(r"\s*```")
 _CODE_START = re.compile(r"\s*(?:(?:async\s+)?def\s|class\s|import\s|from\s+[\w.]+\s+import\s|@\w|[A-Za-z_]\w*\s*(?::[^=]+)?=(?!=))")
 _MISSING_IMPORTS = {"np": "import numpy as np", "numpy": "import numpy", "math": "import math"}
 _MATH_NAMES = frozenset(name for name in dir(math) if not name.startswith("_"))
+# Lines that continue the statement before them rather than start one.
+_CLAUSE = re.compile(r"(?:else|elif|except|finally)\b")
+# Parse errors of a piece that a later line may complete: an open string or bracket.
+_OPEN = re.compile(r"never closed|unterminated triple-quoted|unexpected EOF")
+# Characters ast.parse may read per character of the answer, plus a fixed allowance: every line
+# is read about twice (fences, then the whole answer), so this is ample for any real answer.
+_PARSE_BUDGET_FACTOR = 10
+_PARSE_BUDGET_BASE = 50_000
+# Shorter cuts tried on a broken statement before the run ends before it (each reads it again).
+_MAX_CUTS = 3
 
 
 class ExtractionError(ValueError):
@@ -60,17 +72,18 @@ def extract_policy(text: str, function_name: str = "policy", prefix: str = "") -
 
 def _extract(text: str, function_name: str, prefix: str) -> str:
     version = re.compile(rf"{re.escape(function_name)}(?:_v\d+)?")
+    budget = _ParseBudget(prefix + text)
     if prefix:
-        statements = [s for module in _code_regions(prefix + text) for s in module.body]
+        statements = [s for module in _code_regions(prefix + text, budget) for s in module.body]
         # Lines up to here are the prompt's alone; the version the completion wrote ends after them.
         prompt_lines = prefix.count("\n")
         versions = [f for f in _versions(statements, version) if f.end_lineno > prompt_lines]
         if not versions:
             raise ExtractionError(f"the completion holds no complete body of '{function_name}'")
     else:
-        statements = [s for block in _fenced_blocks(text) for module in _code_regions(block) for s in module.body]
+        statements = [s for block in _fenced_blocks(text) for module in _code_regions(block, budget) for s in module.body]
         if not _versions(statements, version):
-            statements = [s for module in _code_regions(text) for s in module.body]
+            statements = [s for module in _code_regions(text, budget) for s in module.body]
         versions = _versions(statements, version)
     if not versions:
         if re.search(rf"^\s*def\s+{version.pattern}\s*\(", text, re.MULTILINE):
@@ -101,42 +114,131 @@ def _fenced_blocks(text: str) -> list[str]:
     return blocks
 
 
-def _code_regions(chunk: str) -> list[ast.Module]:
+def _code_regions(chunk: str, budget: _ParseBudget) -> list[ast.Module]:
     """Every parseable stretch of code in `chunk`, skipping the prose between them; line
     numbers are the chunk's."""
     lines = chunk.splitlines()
     modules, start = [], 0
     while start < len(lines):
-        found = _parse_prefix(lines, start) if _CODE_START.match(lines[start]) else None
-        if found is None:
-            start += 1
-        else:
+        found = _parse_prefix(lines, start, budget) if _CODE_START.match(lines[start]) else None
+        if found is not None:
             module, end = found
             modules.append(ast.increment_lineno(module, start))
             start = end
+        elif lines[start].lstrip().startswith("@"):
+            # A start further down the same run of decorators meets the same statement after it,
+            # so it fails the same way: skip the run (a model repeating `@x` costs one try).
+            indent = lines[start][: len(lines[start]) - len(lines[start].lstrip())]
+            start += 1
+            while start < len(lines) and lines[start].startswith(indent + "@"):
+                start += 1
+        else:
+            start += 1
     return modules
 
 
-def _parse_prefix(lines: list[str], start: int) -> tuple[ast.Module, int] | None:
-    """The longest parseable run of lines from `start` at its indentation, and where it ends."""
+class _ParseBudget:
+    """Characters `ast.parse` may still read for one answer. A parse costs time in proportion to
+    its text, failing ones too, so a bound on the total keeps any answer linear in its length."""
+
+    def __init__(self, text: str):
+        self.left = _PARSE_BUDGET_FACTOR * len(text) + _PARSE_BUDGET_BASE
+
+    def parse(self, lines: list[str]) -> ast.Module:
+        source = "\n".join(lines)
+        self.left -= len(source) + 1
+        if self.left < 0:
+            raise ExtractionError("the answer is too irregular to read (parse budget spent)")
+        return ast.parse(source)
+
+
+def _statement_starts(lines: list[str], begin: int, indent: str) -> Iterator[int]:
+    """The lines after `begin` that likely start a statement at `indent`, then the end of the run
+    at that indentation; read lazily, so a run that fails early costs only its first lines.
+    A start is a line at `indent`, not a clause of the statement before (`else:`) and not after a
+    decorator or a backslash. It is a guess (a bracket or string can hold such a line):
+    `_parse_prefix` joins pieces that fail alone."""
+    previous = lines[begin][len(indent) :].rstrip()
+    i = begin + 1
+    while i < len(lines):
+        if lines[i].strip():
+            if not lines[i].startswith(indent):
+                break
+            line = lines[i][len(indent) :]
+            if line[0] not in " \t#" and not _CLAUSE.match(line) and not previous.startswith("@") and not previous.endswith("\\"):
+                yield i
+            previous = line.rstrip()
+        i += 1
+    yield i
+
+
+def _parse_prefix(lines: list[str], start: int, budget: _ParseBudget) -> tuple[ast.Module, int] | None:
+    """The longest parseable run of lines from `start` at its indentation, and where it ends.
+
+    Read statement by statement, so each line is parsed about once: a piece that fails alone
+    because it opens a string or bracket is joined with the following ones (doubling), else the
+    run ends there, cut before the line that failed (the broken tail of a truncated answer;
+    at most `_MAX_CUTS` cuts)."""
     indent = lines[start][: len(lines[start]) - len(lines[start].lstrip())]
-    end = start
-    while end < len(lines) and (not lines[end].strip() or lines[end].startswith(indent)):
-        end += 1
-    region = [line[len(indent) :] for line in lines[start:end]]
-    size = len(region)
-    while size > 0:
-        try:
-            module = ast.parse("\n".join(region[:size]))
-        except SyntaxError as error:
-            # No prefix that still holds the offending line can parse: skip past it at once.
-            size = min(size - 1, (error.lineno or size) - 1)
-            continue
-        cut = size < len(region)
-        if cut and module.body and isinstance(module.body[-1], ast.FunctionDef) and _is_empty(module.body[-1]):
-            module.body.pop()  # truncated right after its signature or docstring
-        return module, start + size
-    return None
+    pending = _statement_starts(lines, start, indent)
+    starts: list[int] = []  # read so far; once `pending` is spent, the last is the end of the run
+    spent = False
+
+    def start_after(done: int, n: int) -> tuple[int, bool]:
+        """The n-th start after line `done` (0: the next), or the end; and whether it is the end."""
+        nonlocal spent
+        index = bisect.bisect_right(starts, done) + n
+        while len(starts) <= index and not spent:
+            extra = next(pending, None)
+            if extra is None:
+                spent = True
+            else:
+                starts.append(extra)
+        return starts[min(index, len(starts) - 1)], spent and index >= len(starts) - 1
+
+    def parse(begin: int, stop: int) -> ast.Module:
+        return ast.increment_lineno(budget.parse([line[len(indent) :] for line in lines[begin:stop]]), begin - start)
+
+    body: list[ast.stmt] = []
+    done = start  # lines[start:done] are parsed
+    while True:
+        stop, last = start_after(done, 0)
+        if stop <= done:
+            break
+        step, first_stop, piece = 1, stop, None
+        while True:
+            try:
+                piece = parse(done, stop)
+                break
+            except SyntaxError as error:
+                if step == 1:
+                    first_error = error
+                if last or not _OPEN.search(error.msg or ""):
+                    break
+                step *= 2
+                stop, last = start_after(done, step - 1)
+        if piece is None:
+            # No longer prefix holds the offending line: keep what parses before it.
+            size = min((first_error.lineno or 1) - 1, first_stop - done - 1)
+            for _ in range(_MAX_CUTS):
+                if size <= 0:
+                    break
+                try:
+                    piece = parse(done, done + size)
+                    break
+                except SyntaxError as error:
+                    size = min(size - 1, (error.lineno or size) - 1)
+            if piece is not None and piece.body and isinstance(piece.body[-1], ast.FunctionDef) and _is_empty(piece.body[-1]):
+                piece.body.pop()  # truncated right after its signature or docstring
+            if piece is not None:
+                body += piece.body
+                done += size
+            break
+        body += piece.body
+        done = stop
+    if done == start:
+        return None
+    return ast.Module(body=body, type_ignores=[]), done
 
 
 def _versions(statements: list[ast.stmt], version: re.Pattern) -> list[ast.FunctionDef]:

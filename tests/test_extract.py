@@ -1,4 +1,6 @@
+import ast
 import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -466,3 +468,38 @@ def test_answers_a_small_model_really_wrote():
     assert sqrt_unbound.startswith("from math import sqrt\n\ndef policy(obs):")
     # `policy_vX` is no version name: the stub after `policy` is dropped with the other unused code.
     assert several == "from math import pi, sqrt\n\ndef policy(obs):\n    \"\"\"Final improved version of policy.\"\"\"\n    theta, sin_theta, angular_velocity = obs\n    return -sqrt(20.28 * abs(theta) / (1.716 + sqrt(2.46)))"
+
+
+# A model stuck repeating a line, after a good policy or alone (issue 24 part 5): the policy is
+# still read, and the parser reads each character about once, not once per line (the old cut
+# re-parsed the rest of the answer from every line: minutes for 600 `@x` lines).
+POLICY = (Path(__file__).parent.parent / "examples" / "paper_quadruped.py").read_text()
+REPEATED = [
+    ("decorators_after_a_policy", POLICY + "\n" + "@x\n" * 600, "ok"),
+    ("definitions_after_a_policy", POLICY + "\n" + "def f():\n" * 10_000, "ok"),
+    ("definitions_alone", "def f():\n" * 11_000, "no function named 'policy'"),
+]
+
+
+@pytest.mark.parametrize("text, outcome", [r[1:] for r in REPEATED], ids=[r[0] for r in REPEATED])
+def test_repeated_lines_are_read_in_linear_time(monkeypatch, text, outcome):
+    parsed = []
+    real_parse = ast.parse
+
+    def counting_parse(source, *args, **kwargs):
+        parsed.append(len(source))
+        return real_parse(source, *args, **kwargs)
+
+    monkeypatch.setattr(ast, "parse", counting_parse)
+    if outcome == "ok":
+        assert "def policy(obs)" in extract_policy(text)
+    else:
+        with pytest.raises(ExtractionError, match=outcome):
+            extract_policy(text)
+    assert sum(parsed) < 10 * len(text)
+
+
+def test_an_answer_that_would_cost_quadratic_parsing_is_refused():
+    # Every line opens a bracket: each start reads to the end before failing.
+    with pytest.raises(ExtractionError, match="too irregular to read"):
+        extract_policy("x = (\n" * 16_000)
