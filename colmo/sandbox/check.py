@@ -19,7 +19,9 @@ Refused:
   holding objects: `'O'`, `'object'`, `[('a', 'O')]`, `('O', (1,))`; `object`, `object_`), the
   `buffer=` keyword and the array constructors that take a buffer (`np.ndarray(...)`,
   `recarray`, `chararray`, `matrix`, `memmap`; `isinstance(x, np.ndarray)` stays allowed),
-  `resize` (frees a buffer under live views with `refcheck=False`), `setflags`;
+  `resize` (frees a buffer under live views with `refcheck=False`), `setflags`; byte views of
+  a buffer (`.data`, `.cast`, `.tobytes`, `memoryview`: of an object array they expose its
+  pointers); the `isinstance` exception holds only while `isinstance` is the builtin;
 - decorators (a decorator can rebind a function's name to a shared object, whose attributes
   the assignment rule below would then allow), class definitions, `global`, `nonlocal`;
 - attribute assignment or deletion except on the program's own functions (`policy.state = 0`),
@@ -34,7 +36,7 @@ from typing import Collection, Sequence
 
 import numpy as np
 
-from colmo.astutil import IDENTIFIER_FIELDS
+from colmo.astutil import IDENTIFIER_FIELDS, bindings
 from colmo.errors import failure_reason
 
 FORBIDDEN_NAMES = frozenset({
@@ -50,6 +52,8 @@ FORBIDDEN_ATTRIBUTES = frozenset({
     "popen", "format", "format_map", "mro",
     # raw memory
     "object_", "resize", "setflags", "recarray", "chararray", "matrix", "record",
+    # byte views of an array's buffer: of an object array, they read and write its pointers
+    "data", "cast", "tobytes", "tostring", "getbuffer",
 })
 # Array constructors that take a buffer: allowed only as the class in isinstance(x, np.ndarray).
 _BUFFER_CLASSES = frozenset({"ndarray"})
@@ -87,17 +91,15 @@ def _is_object_dtype(text: str) -> bool:
 
 
 def _bindings(tree: ast.AST) -> tuple[set[str], set[str]]:
-    """The names the program defines with `def`, and the names it binds any other way."""
+    """The names the program defines with `def`, and the names it binds any other way (assignment,
+    `for`, `with ... as`, `:=`, imports, parameters, `except ... as`, match captures, `global`,
+    comprehension targets): a builtin's name is the builtin only where neither binds it."""
     functions, others = set(), set()
     for node in ast.walk(tree):
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
             functions.add(node.name)
-        elif isinstance(node, ast.Name) and not isinstance(node.ctx, ast.Load):
-            others.add(node.id)
-        elif isinstance(node, ast.alias):
-            others.add((node.asname or node.name).split(".")[0])
-        elif isinstance(node, (ast.arg, ast.ExceptHandler, ast.MatchAs, ast.MatchStar, ast.MatchMapping)):
-            others.add(getattr(node, IDENTIFIER_FIELDS[type(node)]))
+        else:
+            others.update(bindings(node))
     return functions, others
 
 
@@ -117,12 +119,17 @@ class _Checker(ast.NodeVisitor):
             super().visit(node)
 
     def visit_Call(self, node: ast.Call) -> None:
-        # isinstance(x, np.ndarray): the class is only compared against, never called.
-        if isinstance(node.func, ast.Name) and node.func.id == "isinstance" and len(node.args) == 2:
+        # isinstance(x, np.ndarray): the class is only compared against, never called; only the
+        # builtin isinstance does that, so the exception holds only while the program leaves the
+        # name unbound, and everything else in the call (keywords included) is checked as usual.
+        if isinstance(node.func, ast.Name) and node.func.id == "isinstance" and "isinstance" not in self.bound and len(node.args) == 2:
+            self.visit(node.func)
             self.visit(node.args[0])
             classes = node.args[1].elts if isinstance(node.args[1], ast.Tuple) else [node.args[1]]
             for cls in classes:
                 self.visit(cls.value if isinstance(cls, ast.Attribute) and cls.attr in _BUFFER_CLASSES else cls)
+            for keyword in node.keywords:
+                self.visit(keyword)
             return
         self.generic_visit(node)
 
