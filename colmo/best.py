@@ -8,8 +8,14 @@ rendered (`colmo.render`) on its first held-out episode, into the run directory.
 optional, and none can fail the search: a missing OpenGL or a simplification that finds
 nothing to remove is a line in the log and in the summary.
 
-With `search.max_seconds`, this work must end by `until` (the search's deadline plus a grace
-period): each step gets the time that is left, and one that does not fit is skipped and logged.
+With `search.max_seconds`, the whole run (from the start of the process) must end by the limit,
+this work included: `plan_finish` estimates what each step costs from the starter's calibration
+(seconds per referee episode) and, where the full work does not fit in the time it is given,
+makes each step cheaper (fewer held-out episodes and programs, a shorter simplification, a
+smaller video at fewer frames per second); the search stops early enough to leave that time.
+At the end, `finish` plans again with the time actually left, and each step ends by its slot;
+the summary says where the work was cut (`episodes` of each held-out score, the video's `size`
+and `note`).
 """
 
 from __future__ import annotations
@@ -30,7 +36,66 @@ from colmo.store import SIMPLIFIED_POLICY_FILE, ProgramStore
 
 log = logging.getLogger("colmo.search")
 
-_RENDER_SECONDS = 60.0  # what a 1000-step video and its plot take on a loaded laptop core, at most
+SAFETY = 1.5  # a loaded machine runs the finish this much slower than the calibration measured
+FINISH_SHARE = 0.4  # of a time limit, at most, for the finish when the full work does not fit
+_RENDER_FIXED_S = 6.0  # matplotlib's import, the plot, ffmpeg's start: the render's cost besides frames
+_VIDEO_S = 20.0  # seconds of frames for a full-size video at its full frame rate, at most
+_VIDEO_MIN_S = 2.0  # seconds of frames for a small video at a low frame rate
+_SMALL = (320, 240)
+
+
+@dataclass(frozen=True)
+class FinishPlan:
+    """What the end of a run will do, and the seconds each step is given."""
+
+    top: int  # programs that get a held-out score
+    heldout_episodes: int
+    heldout_seconds: float
+    simplify_seconds: float
+    render_seconds: float
+    video_seconds: float
+    size: tuple[int, int]  # of the video
+    reduced: bool  # cheaper than configured, to fit the time limit
+
+    @property
+    def seconds(self) -> float:
+        return self.heldout_seconds + self.simplify_seconds + self.render_seconds
+
+    def describe(self, cfg: SearchConfig) -> str:
+        parts = [f"held-out scores of {self.top} program(s) over {self.heldout_episodes} episodes"]
+        if cfg.evaluation.simplify:
+            parts.append(f"simplification {self.simplify_seconds:.0f} s")
+        if cfg.evaluation.render:
+            parts.append(f"video {self.size[0]}x{self.size[1]}")
+        return ", ".join(parts) + (" (reduced to fit search.max_seconds)" if self.reduced else "")
+
+
+def plan_finish(cfg: SearchConfig, episode_seconds: float, workers: int, available: float = math.inf) -> FinishPlan:
+    """The finish as configured if it fits in `available` seconds, else each step cheaper, in
+    equal shares of it. `episode_seconds`: one referee episode (from the starter's calibration)."""
+    episode = SAFETY * max(episode_seconds, 0.01)
+    episodes, top, workers = cfg.evaluation.episodes, cfg.evaluation.top, max(workers, 1)
+
+    def heldout_cost(programs: int, n: int) -> float:
+        return programs * math.ceil(n / workers) * episode
+
+    # The simplifier measures the best program twice on both episode sets, then a few rounds.
+    simplify = 6 * (heldout_cost(1, episodes) + heldout_cost(1, cfg.task.episodes)) if cfg.evaluation.simplify else 0.0
+    render = episode + _RENDER_FIXED_S + _VIDEO_S if cfg.evaluation.render else 0.0
+    full = FinishPlan(top, episodes, heldout_cost(top, episodes), simplify, render, _VIDEO_S, (640, 480), False)
+    if full.seconds <= available:
+        return full
+    # The render first gets what it cannot do without (the episode, the plot, a few frames).
+    render = max(episode + _RENDER_FIXED_S + _VIDEO_MIN_S, available / (1 + cfg.evaluation.simplify + cfg.evaluation.render)) if cfg.evaluation.render else 0.0
+    share = max(available - render, 0.0) / (1 + cfg.evaluation.simplify)
+    rounds = max(1, int(share // episode))  # one episode per worker at a time
+    per_program = min(math.ceil(episodes / workers), rounds)
+    kept = min(top, max(1, rounds // per_program))
+    video = max(render - episode - _RENDER_FIXED_S, _VIDEO_MIN_S)
+    return FinishPlan(
+        kept, min(episodes, per_program * workers), heldout_cost(kept, per_program * workers),
+        share if cfg.evaluation.simplify else 0.0, render, video, (640, 480) if video >= _VIDEO_S else _SMALL, True,
+    )
 
 
 @dataclass
@@ -44,8 +109,9 @@ class BestPrograms:
 
 
 def top_records(store: ProgramStore, count: int) -> list[SampleRecord]:
-    """The `count` best evaluated programs of a run, best first (earliest first among equals)."""
-    records = sorted((r for r in store.records() if r.status == EVALUATED and r.sample >= 0), key=lambda r: (-r.score, r.sample))
+    """The `count` best evaluated programs of a run, best first (earliest first among equals);
+    the starter among them, since a short run's best may be the starter."""
+    records = sorted((r for r in store.records() if r.status == EVALUATED), key=lambda r: (-r.score, r.sample))
     return records[:count]
 
 
@@ -53,15 +119,23 @@ def _left(until: float) -> float:
     return until - time.monotonic()
 
 
-def finish(cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator: Evaluator, run_dir: Path, until: float = math.inf) -> BestPrograms:
-    """Held-out scores of the top programs (stored with them), then the best one rendered, all
-    by `until` (`time.monotonic()` seconds)."""
+def finish(
+    cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator: Evaluator, run_dir: Path,
+    until: float = math.inf, episode_seconds: float = 0.0,
+) -> BestPrograms:
+    """Held-out scores of the top programs (stored with them), then the best one simplified and
+    rendered, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`."""
     best = BestPrograms()
-    top = top_records(store, cfg.evaluation.top)
-    heldout = heldout_evaluator(evaluator, cfg.seed, cfg.evaluation.episodes)
+    plan = plan_finish(cfg, episode_seconds, executor.n_workers, max(_left(until), 0.0))
+    if plan.reduced:
+        log.warning("finishing in %.0f s: %s", max(_left(until), 0.0), plan.describe(cfg))
+    top = top_records(store, plan.top)
+    heldout = heldout_evaluator(evaluator, cfg.seed, plan.heldout_episodes)
+    heldout_until = time.monotonic() + plan.heldout_seconds
     best_took = 0.0  # seconds the best program's held-out score took: what simplifying costs per measurement
     for record in top:
-        limit, started = min(_left(until), heldout.referee_timeout_s), time.monotonic()
+        # The best program may use the whole run's time left; the others only the held-out slot.
+        limit, started = min(_left(until if not best.heldout else heldout_until), heldout.referee_timeout_s), time.monotonic()
         evaluation = heldout_score(executor, heldout, record.skeleton, record.params, timeout_s=limit) if limit > 0 else None
         if evaluation is not None and evaluation.failure == CANCELLED:  # the search is stopping at once
             return best
@@ -72,41 +146,62 @@ def finish(cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator
         best_took = best_took or time.monotonic() - started
         score: Optional[float] = None if evaluation.failure else evaluation.score
         store.set_heldout(record.sample, score)
-        best.heldout.append({"sample": record.sample, "key": record.key, "score": record.score, "heldout_score": score, "heldout_failure": evaluation.failure})
+        best.heldout.append({
+            "sample": record.sample, "key": record.key, "score": record.score, "heldout_score": score, "heldout_failure": evaluation.failure,
+            "episodes": len(heldout.seeds),
+        })
         shown = "failed" if score is None else f"{score:.2f}"
         log.info("sample %d: training score %.2f, held-out %s over %d episodes", record.sample, record.score, shown, len(heldout.seeds))
     if not top:
         return best
     if cfg.evaluation.simplify:
+        simplify_until = until - plan.render_seconds
         # Simplifying first measures the best program on the training and the held-out episodes.
-        if not best.heldout or _left(until) < 2 * best_took:
+        if not best.heldout or simplify_until - time.monotonic() < 2 * best_took:
             log.warning("no time left to simplify the best policy (search.max_seconds)")
         else:
-            best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, until)
+            best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until, plan.reduced)
     if cfg.evaluation.render:
-        if _left(until) < _RENDER_SECONDS:
-            log.warning("no time left for the video and plot of the best policy (search.max_seconds)")
-            return best
-        from colmo.render import render_policy  # matplotlib and the renderer: only when asked for
-
-        title = f"{cfg.task.name}: best policy (sample {top[0].sample}, training score {top[0].score:.1f})"
-        media = render_policy(executor, heldout, top[0].skeleton, top[0].params, run_dir, title)
-        best.media = {name: str(path.relative_to(run_dir)) for name, path in (("plot", media.plot), ("video", media.video)) if path}
-        if media.note:
-            best.media["note"] = media.note
-            log.warning("best policy: %s", media.note)
+        best.media = _render(cfg, executor, heldout, top[0], run_dir, until, plan)
     return best
 
 
-def _simplify(cfg: SearchConfig, executor: Executor, evaluator: Evaluator, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float) -> dict:
-    """The best policy simplified into `simplified_policy.py`; its `to_json()` for the summary."""
+def _render(cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float, plan: FinishPlan) -> dict:
+    """The video and plot of the best policy, its frames in the time left; the summary's `media`."""
+    left = _left(until)
+    if left < _RENDER_FIXED_S:
+        log.warning("no time left for the video and plot of the best policy (search.max_seconds)")
+        return {}
+    from colmo.render import render_policy  # matplotlib and the renderer: only when asked for
+
+    width, height = plan.size
+    trace_seconds = plan.render_seconds - plan.video_seconds - _RENDER_FIXED_S  # the episode the referee records
+    video_seconds = None if math.isinf(until) else max(min(plan.video_seconds, left - _RENDER_FIXED_S - trace_seconds), _VIDEO_MIN_S)
+    title = f"{cfg.task.name}: best policy (sample {record.sample}, training score {record.score:.1f})"
+    media = render_policy(executor, heldout, record.skeleton, record.params, run_dir, title, width=width, height=height, video_seconds=video_seconds)
+    found = {name: str(path.relative_to(run_dir)) for name, path in (("plot", media.plot), ("video", media.video)) if path}
+    if media.video:
+        found["size"] = f"{width}x{height}"
+    if media.note:
+        found["note"] = media.note
+        log.warning("best policy: %s", media.note)
+    return found
+
+
+def _simplify(
+    cfg: SearchConfig, executor: Executor, evaluator: Evaluator, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float,
+    short: bool = False,
+) -> dict:
+    """The best policy simplified into `simplified_policy.py`; its `to_json()` for the summary.
+    `short`: one candidate per worker at a time, so the deadline is checked often."""
     from colmo.simplify import simplify_program
 
     options = cfg.simplify
+    batch_size = options.batch_size or (executor.n_workers if short else None)
     try:
         result = simplify_program(
             executor, evaluator, heldout, record.code, cfg.gfo, options.tolerance, cfg.seed, options.max_rounds,
-            options.batch_size, stop=lambda: _left(until) <= 0,
+            batch_size, stop=lambda: _left(until) <= 0,
         )
     except RunError as error:  # the best program fails where the simplifier measures it
         log.warning("best policy not simplified: %s", error)

@@ -362,7 +362,11 @@ class SearchLoopConfig:
         2, "a sample whose program was already evaluated is generated again, from another selection of the database "
         "and with a fresh seed, up to this many times (each a model call) before it is recorded as a duplicate",
     )
-    max_seconds: float = option(0.0, "wall-clock limit of the whole search; 0: none")
+    # One hour by default: 1000 quadruped samples at one evaluation a second would take a day and
+    # more, and a user should not have to know that to get a run that ends on its own.
+    max_seconds: float = option(
+        3600.0, "wall-clock limit of the whole run from the process's start, held-out scores, simplification and video included; 0: none",
+    )
     stop_at_score: Optional[float] = option(None, "stop once the best training score reaches this")
     queue_size: int = option(2, "batches in flight: generation overlaps evaluation")
     progress: bool = option(True, "live progress display on a terminal, a plain line every progress_every_s otherwise")

@@ -3,7 +3,8 @@
 On a terminal: a live display on stderr, redrawn twice a second from the search's counters, so
 it moves with every evaluation, not every batch: samples, evaluations and evaluations/s,
 control steps, the best training score, generator and evaluator busy, and the time left
-against the limit that binds (samples, seconds, or a target score). Log lines print above it
+against the limit that binds (samples, seconds, or a target score), from the first seconds on
+(the starter's calibration estimates the search until samples settle). Log lines print above it
 (rich's logging handler on the display's console), never into it. Without a terminal: the
 same numbers as one plain log line every `search.progress_every_s` seconds.
 """
@@ -45,8 +46,9 @@ class Snapshot:
     best: Optional[float]
     generator_busy: float
     evaluator_busy: float
-    max_seconds: float
+    max_seconds: float  # the run's time limit, counted from the search's start
     stop_at_score: Optional[float]
+    estimated_seconds: Optional[float] = None  # the search by max_samples, from the starter's calibration
 
     @property
     def evaluations_per_second(self) -> float:
@@ -55,12 +57,15 @@ class Snapshot:
     def time_left(self) -> tuple[Optional[float], str]:
         """Seconds left against the limit that binds first, and its name: `stop_at_score` (0 s:
         the target is reached, the search is finishing), else whichever of `max_seconds` and
-        `max_samples` (at the rate samples have settled so far) ends the run sooner. None when
-        nothing tells yet (no sample settled and no time limit)."""
+        `max_samples` (at the rate samples have settled so far; before the first one settles, by
+        the estimate from the starter's calibration) ends the run sooner. None when nothing
+        tells yet (no sample settled, no estimate and no time limit)."""
         if self.stop_at_score is not None and self.best is not None and self.best >= self.stop_at_score:
             return 0.0, "stop_at_score"
         rate = self.samples / self.elapsed if self.elapsed and self.samples else 0.0
         by_samples = max(self.max_samples - self.samples, 0) / rate if rate else None
+        if by_samples is None and self.estimated_seconds is not None:
+            by_samples = max(self.estimated_seconds - self.elapsed, 0.0)
         by_seconds = max(self.max_seconds - self.elapsed, 0.0) if self.max_seconds else None
         if by_seconds is not None and (by_samples is None or by_seconds <= by_samples):
             return by_seconds, "max_seconds"
@@ -81,7 +86,7 @@ class Snapshot:
 
     def _left(self) -> str:
         left, limit = self.time_left()
-        return f"{_duration(left)} left ({limit})"
+        return f"{duration(left)} left ({limit})"
 
     def _counts(self) -> str:
         return (
@@ -101,8 +106,9 @@ class Snapshot:
         return f"{self.fraction_done():4.0%} | {self._left()}", self._counts(), self._scores()
 
 
-def _duration(seconds: Optional[float]) -> str:
-    if seconds is None:
+def duration(seconds: Optional[float]) -> str:
+    """`12m05s`, `3h20m`; `?` for an unknown or endless duration."""
+    if seconds is None or not math.isfinite(seconds):
         return "?"
     minutes, secs = divmod(int(seconds), 60)
     return f"{minutes // 60}h{minutes % 60:02d}m" if minutes >= 60 else f"{minutes}m{secs:02d}s"
@@ -119,7 +125,8 @@ def snapshot(search: "Search") -> Snapshot:
         evaluations=executor.evaluations_done, steps=executor.steps_done, elapsed=elapsed,
         best=search.database.best.score if search.database else None,
         generator_busy=generator_busy, evaluator_busy=evaluator_busy,
-        max_seconds=limits.max_seconds, stop_at_score=limits.stop_at_score,
+        max_seconds=search.end - search.start if math.isfinite(search.end) else 0.0, stop_at_score=limits.stop_at_score,
+        estimated_seconds=search.estimated_seconds,
     )
 
 

@@ -18,7 +18,10 @@ with `gfo=none`: `colmo.database.identity`) is generated again from another sele
 counters count model calls, the regenerations included, so that samples mean model calls.
 
 Stopping: `search.max_samples`, `search.stop_at_score`, and `search.max_seconds`, a wall-clock
-limit: at the deadline a generation in flight is abandoned and programs in flight stop tuning
+limit of the whole run from the start of the process: the search stops early enough to leave
+the programs in flight their final scores and the finish its held-out scores, simplification
+and video (`colmo.best.plan_finish`, from the starter's calibration), and says before the first
+batch how long the run will take and which limit binds. At the search's deadline a generation in flight is abandoned and programs in flight stop tuning
 at their next candidate, their best so far scored and stored (`cut_short`). Ctrl-C and SIGTERM
 do the same; a second one cancels the evaluations in flight, whose samples are stored as
 `interrupted` and evaluated when the run is resumed. Nothing evaluated is ever lost.
@@ -28,6 +31,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import logging
+import os
 import threading
 import time
 from collections import deque
@@ -37,7 +41,7 @@ from typing import Optional
 
 import numpy as np
 
-from colmo.best import BestPrograms, finish
+from colmo.best import FINISH_SHARE, SAFETY, BestPrograms, finish, plan_finish
 from colmo.config import SearchConfig
 from colmo.database import ProgramDatabase, StoredProgram, identity
 from colmo.environments.perturb import with_perturbation
@@ -50,6 +54,7 @@ from colmo.intake import Unusable, read_program
 from colmo.optimize import CandidateEvaluator, optimize_program
 from colmo.optimize.tune import calibrated
 from colmo.program import ParametricProgram, parametrize
+from colmo.progress import duration
 from colmo.prompt import Prompt, build_prompt
 from colmo.record import (
     DUPLICATE,
@@ -77,7 +82,9 @@ log = logging.getLogger("colmo.search")
 
 STARTER_SAMPLE = -1
 _POLL_S = 0.2  # how often waits check the deadline and interruptions
-_FINISH_GRACE_S = 5.0
+# The finish ends this long before the limit: writing the summary, closing the workers and leaving
+# the process took up to 6.5 s on 2 loaded cores, which this and the 5 s a run may take past its limit cover.
+_CLOSE_S = 1.5
 
 
 @dataclass
@@ -112,7 +119,12 @@ class Search:
         self.generation_seconds = 0.0
         self.stop_reason = ""
         self.start = time.perf_counter()
-        self.deadline = self.start + cfg.search.max_seconds if cfg.search.max_seconds else float("inf")
+        # The limit counts from the process's start (imports and Hydra included); the search's
+        # own deadline comes earlier, once the calibration tells what the finish will cost.
+        self.end = self.start - process_seconds() + cfg.search.max_seconds if cfg.search.max_seconds else float("inf")
+        self.deadline = self.end
+        self.episode_seconds = 0.0  # one referee episode of the starter: what the finish costs per episode
+        self.estimated_seconds: Optional[float] = None  # the search by max_samples, before the first batch
         self.stopping = threading.Event()  # programs in flight stop tuning at their next candidate
         self.program_threads = concurrent.futures.ThreadPoolExecutor(cfg.llm.batch_size * cfg.search.queue_size, thread_name_prefix="colmo-program")
         self.generation_thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
@@ -133,8 +145,11 @@ class Search:
                     self._start_generator()
                 options = with_perturbation(self.cfg.task.env, self.cfg.task.perturb)  # training under task.perturb
                 provisional = Evaluator.for_task(self.spec, options, self.seeds, self.cfg.executor.memory_mb)
+                calibrating = time.perf_counter()
                 self.evaluator = calibrated(self.executor, provisional, parametrize(self.spec.starter_code), self.cfg.executor.timeout_s)
+                calibration = time.perf_counter() - calibrating
                 self.database = ProgramDatabase(self.cfg.database, self._starter(), self.cfg.seed)
+                self._budget(calibration)
                 self.best_so_far = [(0, self.database.best.score)]
                 to_evaluate = self._replay()
                 self._start_generator()
@@ -148,7 +163,7 @@ class Search:
                 self._stop_programs()
             best = BestPrograms()
             if self.database is not None and self.stop_reason in FINISHED:  # a stopped run finishes when resumed
-                best = finish(self.cfg, self.store, self.executor, self.evaluator, self.run_dir, until=self._finish_by())
+                best = finish(self.cfg, self.store, self.executor, self.evaluator, self.run_dir, until=self._finish_by(), episode_seconds=self.episode_seconds)
             summary = self._summary(best)
             write_outputs(summary, self.run_dir)
             for observer in self.observers:
@@ -184,6 +199,7 @@ class Search:
             if starter.failure:
                 raise RunError(f"the starter policy in {self.spec.path} fails: {starter.failure}")
             self.store.add(starter)
+        self.program_seconds = starter.evaluation_seconds  # one program's tuning, alone on the workers
         return StoredProgram(starter.key, starter.code, starter.score, 0, STARTER_SAMPLE, starter.nodes)
 
     def _replay(self) -> list[SampleRecord]:
@@ -427,12 +443,43 @@ class Search:
             log.warning("stopping at once: the programs in flight are stored as interrupted")
             threading.Thread(target=self.executor.close, kwargs={"cancel": True}, daemon=True).start()
 
+    def _budget(self, calibration: float) -> None:
+        """The run's duration estimated from the starter's calibration (`calibration` seconds
+        for its training episodes, fast path and referee) and tuning, the search's deadline set
+        to leave the finish and the programs in flight their time, both said in one line."""
+        cfg = self.cfg
+        workers = self.executor.n_workers
+        self.episode_seconds = calibration / len(self.seeds)
+        in_parallel = max(1, min(cfg.llm.batch_size * cfg.search.queue_size, workers // cfg.gfo.workers))
+        self.estimated_seconds = cfg.search.max_samples * self.program_seconds / in_parallel
+        plan = plan_finish(cfg, self.episode_seconds, workers)
+        limit = "max_samples"
+        if cfg.search.max_seconds:
+            # Past the deadline each program in flight ends its candidate, then scores its rounded
+            # constants on the fast path and by the referee: three evaluations each, on shared workers.
+            evaluation = self.program_seconds / (1 if cfg.gfo.method == "none" else cfg.gfo.budget + 2)
+            in_flight = SAFETY * 3 * evaluation * max(1.0, cfg.llm.batch_size * cfg.search.queue_size / workers)
+            left = self.end - time.perf_counter()
+            limit = f"max_seconds={cfg.search.max_seconds:g}"
+            plan = plan_finish(cfg, self.episode_seconds, workers, FINISH_SHARE * max(left, 0.0))
+            # The search keeps a quarter of the time left at least: `finish` plans again with what it leaves.
+            self.deadline = max(self.end - plan.seconds - in_flight, time.perf_counter() + 0.25 * max(left, 0.0))
+            if self.deadline - time.perf_counter() >= self.estimated_seconds:
+                limit = "max_samples"
+        log.info(
+            "estimated duration: search %s (%d samples x %.1f s per program, %d at a time; generation not included), "
+            "finish %s (%s); the limit that binds: %s%s",
+            duration(self.estimated_seconds), cfg.search.max_samples, self.program_seconds, in_parallel, duration(plan.seconds),
+            plan.describe(cfg), limit,
+            f" (the search stops {duration(self.end - self.deadline)} before it to finish)" if cfg.search.max_seconds else "",
+        )
+
     def _finish_by(self) -> float:
         """When the work on the best programs must end (`time.monotonic()`): with a time limit,
-        a grace of 5 s plus 5% of it after the deadline."""
+        in time to write the summary and close the workers by its end."""
         if not self.cfg.search.max_seconds:
             return float("inf")
-        return time.monotonic() + max(self.deadline + _FINISH_GRACE_S + 0.05 * self.cfg.search.max_seconds - time.perf_counter(), 0.0)
+        return time.monotonic() + max(self.end - _CLOSE_S - time.perf_counter(), 0.0)
 
     def _stop_programs(self) -> None:
         self.stopping.set()
@@ -475,3 +522,13 @@ class Search:
             best_so_far=tuple(self.best_so_far), stop_reason=self.stop_reason, run_dir=str(self.run_dir),
             heldout=tuple(programs.heldout), media=programs.media, simplified=programs.simplified, **self._totals(),
         )
+
+
+def process_seconds() -> float:
+    """Seconds since this process started (Linux's /proc); 0 where that is not known."""
+    try:
+        ticks = int(Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()[19])
+        return max(time.clock_gettime(time.CLOCK_BOOTTIME) - ticks / os.sysconf("SC_CLK_TCK"), 0.0)
+    except (OSError, ValueError, IndexError, AttributeError):
+        return 0.0
+

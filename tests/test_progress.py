@@ -74,6 +74,15 @@ def test_time_left_against_the_binding_limit(fields, left, limit, fraction):
     assert f"left ({limit})" in snapshot.line()
 
 
+def test_before_the_first_sample_the_calibration_estimate_tells_the_time_left():
+    # The starter's calibration estimated 1000 s for the samples; 120 s have passed.
+    snapshot = state(samples=0, estimated_seconds=1000.0)
+    assert snapshot.time_left() == (pytest.approx(880.0), "max_samples")
+    assert "14m40s left (max_samples)" in snapshot.line()
+    # A 600 s limit binds before the estimate.
+    assert state(samples=0, estimated_seconds=1000.0, max_seconds=600.0).time_left() == (pytest.approx(480.0), "max_seconds")
+
+
 def test_unknown_time_left_reads_as_a_question_mark():
     assert "? left (max_samples)" in state(samples=0).line()
 
@@ -83,8 +92,8 @@ def fake_search(max_samples: int = 10, progress_every_s: float = 0.05) -> Simple
     executor = SimpleNamespace(busy_seconds=1.0, n_workers=2, evaluations_done=7, steps_done=70_000)
     limits = SimpleNamespace(max_samples=max_samples, max_seconds=0.0, stop_at_score=None, progress=True, progress_every_s=progress_every_s)
     return SimpleNamespace(
-        start=time.perf_counter(), executor=executor, counters=SimpleNamespace(samples=3), in_flight_samples=2,
-        database=None, generation_seconds=0.5, cfg=SimpleNamespace(search=limits),
+        start=time.perf_counter(), end=float("inf"), estimated_seconds=None, executor=executor, counters=SimpleNamespace(samples=3),
+        in_flight_samples=2, database=None, generation_seconds=0.5, cfg=SimpleNamespace(search=limits),
     )
 
 

@@ -15,7 +15,8 @@ round the tuned constants to the 4 significant digits it will be read with, scor
 readable code, and have the referee measure it (`colmo.sandbox.referee`); a fast-path score
 the referee does not reproduce marks the program failed (`tampering: ...`). So the score
 reported is the score of the code shown, measured where the program cannot write. A tuning
-cut short by `stop()` (a deadline) keeps its best constants unrounded, saving the check.
+cut short by `stop()` (a deadline, Ctrl-C) is rounded and scored the same way: its code is as
+readable as any, and the search's deadline reserves the two evaluations this costs.
 """
 
 from __future__ import annotations
@@ -171,9 +172,7 @@ def optimize_program(
     tuning = tune(evaluate, program.values, cfg, seed, stop)
     params, fast, evaluations, steps = tuple(program.values), tuning.initial, tuning.evaluations, tuning.steps
     digits = None
-    if tuning.params != params and tuning.cut_short:  # no time to check the rounded code: keep every digit
-        params, fast = tuning.params, tuning.evaluation
-    elif tuning.params != params:
+    if tuning.params != params:  # cut short or not: the code a person reads has 4-digit constants
         rounded = round_significant(tuning.params)
         evaluation = evaluate.fast([rounded])[0]
         evaluations, steps = evaluations + 1, steps + evaluation.steps

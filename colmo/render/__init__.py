@@ -55,10 +55,12 @@ class EpisodeMedia:
 
 
 def render_episode(
-    env: Environment, trace: EpisodeTrace, directory: Path, title: str, *, width: int = 640, height: int = 480
+    env: Environment, trace: EpisodeTrace, directory: Path, title: str, *, width: int = 640, height: int = 480,
+    video_seconds: Optional[float] = None,
 ) -> EpisodeMedia:
     """Write `episode.png` and, for a MuJoCo environment with OpenGL, `episode.mp4` (or `.gif`
-    without imageio-ffmpeg) in `directory`, from a trace of an episode of `env`."""
+    without imageio-ffmpeg) in `directory`, from a trace of an episode of `env`; the video's
+    frames take about `video_seconds` if given (fewer frames per second: `render_video`)."""
     start = time.monotonic()
     directory = Path(directory)
     plot = plot_episode(trace, directory / PLOT_FILE, title)
@@ -67,7 +69,7 @@ def render_episode(
         note = f"no video: {type(env).__name__} is not a MuJoCo environment"
     else:
         try:
-            video = render_video(env, trace, directory / VIDEO_FILE, width=width, height=height)
+            video = render_video(env, trace, directory / VIDEO_FILE, width=width, height=height, max_seconds=video_seconds)
         except NoGLError as error:
             note = f"no video: {error}"
     return EpisodeMedia(plot, video, note, trace.episode_return, seconds=time.monotonic() - start)
@@ -85,10 +87,12 @@ def render_policy(
     steps: Optional[int] = None,
     width: int = 640,
     height: int = 480,
+    video_seconds: Optional[float] = None,
 ) -> EpisodeMedia:
     """The plot and video (`render_episode`) of episode `evaluator.seeds[episode]` of a program,
     recorded by the referee (pass a held-out evaluator: `colmo.evaluate.heldout_evaluator`),
-    cut to `steps` control steps if given. Never raises for a missing OpenGL, a policy that
+    cut to `steps` control steps if given, its video's frames drawn in about `video_seconds`
+    if given (`render_video`). Never raises for a missing OpenGL, a policy that
     fails in the episode or an invalid trace: then `note` says why, and `plot` is None where
     there is no trace to draw."""
     start = time.monotonic()
@@ -107,5 +111,5 @@ def render_policy(
     if trace is None:
         return EpisodeMedia(None, None, f"no plot or video: {reason}", episode_seed=seed, seconds=time.monotonic() - start)
     env = load_spec(evaluator.spec).make_environment(**dict(evaluator.env))
-    media = render_episode(env, trace, directory, f"{title}\n{where}, {trace.steps} steps", width=width, height=height)
+    media = render_episode(env, trace, directory, f"{title}\n{where}, {trace.steps} steps", width=width, height=height, video_seconds=video_seconds)
     return dataclasses.replace(media, episode_seed=seed, seconds=time.monotonic() - start)

@@ -9,6 +9,9 @@ which bundles an ffmpeg binary) or, without that package, an animated GIF (Pillo
 from __future__ import annotations
 
 import copy
+import itertools
+import math
+import time
 from pathlib import Path
 from typing import Iterator, Optional, Union
 
@@ -82,13 +85,15 @@ def render_video(
     height: int = 480,
     fps: Optional[float] = None,
     camera: Optional[Camera] = None,
+    max_seconds: Optional[float] = None,
 ) -> Path:
     """Replay `trace`'s states in `env.model` and write them as a real-time video; return its path.
 
     An MP4 needs `imageio-ffmpeg`; without it, or when `path` ends in `.gif`, an animated GIF
     is written at `path` with its suffix changed to `.gif`. `fps` is the target frame rate
     (`video_frame_steps`). `camera` is a model camera (id or name) or an `MjvCamera`; by default
-    `default_camera(env.model)`. Raises `NoGLError` if no OpenGL backend works, `ValueError`
+    `default_camera(env.model)`. With `max_seconds`, the first frame is timed and the frame rate
+    lowered (every k-th frame, still in real time) so that the frames take about that long. Raises `NoGLError` if no OpenGL backend works, `ValueError`
     for a trace that does not fit the model.
     """
     if trace.states is None:
@@ -110,32 +115,43 @@ def render_video(
         model.vis.global_.offheight = max(height, model.vis.global_.offheight)
     frame_steps, frame_rate = video_frame_steps(trace.steps, trace.control_timestep, fps)
     view = default_camera(model) if camera is None else camera
+    data = mujoco.MjData(model)  # not env.data: rendering leaves the environment's state alone
+    scene_option = default_scene_option(model)
 
-    def frames() -> Iterator[np.ndarray]:
-        data = mujoco.MjData(model)  # not env.data: rendering leaves the environment's state alone
-        scene_option = default_scene_option(model)
-        with mujoco.Renderer(model, height, width) as renderer:
-            for step in frame_steps:
-                mujoco.mj_setState(model, data, trace.states[step], STATE_SPEC)
-                mujoco.mj_forward(model, data)
-                renderer.update_scene(data, camera=view, scene_option=scene_option)
-                yield renderer.render()
+    def frame(renderer: mujoco.Renderer, step: int) -> np.ndarray:
+        mujoco.mj_setState(model, data, trace.states[step], STATE_SPEC)
+        mujoco.mj_forward(model, data)
+        renderer.update_scene(data, camera=view, scene_option=scene_option)
+        return renderer.render()
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    with mujoco.Renderer(model, height, width) as renderer:
+        started = time.monotonic()
+        first = frame(renderer, frame_steps[0])
+        if max_seconds is not None and len(frame_steps) > 1:
+            allowed = max(2, int(max_seconds / max(time.monotonic() - started, 1e-3)))
+            thin = math.ceil(len(frame_steps) / allowed)
+            frame_steps, frame_rate = frame_steps[::thin], frame_rate / thin
+        frames = itertools.chain([first], (frame(renderer, step) for step in frame_steps[1:]))
+        return _write(frames, path, width, height, frame_rate)
+
+
+def _write(frames: Iterator[np.ndarray], path: Path, width: int, height: int, frame_rate: float) -> Path:
+    """An MP4 through imageio-ffmpeg, else (or for a `.gif` path) an animated GIF."""
     try:
         import imageio_ffmpeg
     except ImportError:
         imageio_ffmpeg = None
     if imageio_ffmpeg is None or path.suffix.lower() == ".gif":
-        return _write_gif(frames(), path.with_suffix(".gif"), frame_rate)
+        return _write_gif(frames, path.with_suffix(".gif"), frame_rate)
     writer = imageio_ffmpeg.write_frames(
         str(path), (width, height), fps=frame_rate, quality=7, macro_block_size=2, ffmpeg_log_level="error"
     )
     writer.send(None)  # starts ffmpeg
     try:
-        for frame in frames():
-            writer.send(np.ascontiguousarray(frame))
+        for image in frames:
+            writer.send(np.ascontiguousarray(image))
     finally:
         writer.close()
     return path

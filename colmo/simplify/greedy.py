@@ -205,7 +205,7 @@ def simplify(
     stop: Callable[[], bool] = lambda: False,
 ) -> SimplifyResult:
     """Simplify `code` (module docstring) and report what it cost. `stop()` is asked before each
-    round and before re-tuning; once it says so, the best program so far is the result. Raises
+    round, between a round's batches and before re-tuning; once it says so, the best program so far is the result. Raises
     `ProgramFails` if the original program fails on the training episodes."""
     if not 0 <= tolerance < 1:
         raise ValueError(f"tolerance must be in [0, 1), got {tolerance}")
@@ -229,7 +229,7 @@ def simplify(
     while rounds < max_rounds and not stop():
         rounds += 1
         candidates = deletion_candidates(current, function_name)
-        choice = _best_deletion(candidates, scorer, rule, batch_size)
+        choice = _best_deletion(candidates, scorer, rule, batch_size, stop)
         if choice is None:
             log.info("round %d: none of %d deletions is acceptable", rounds, len(candidates))
             break
@@ -257,14 +257,19 @@ def simplify(
     )
 
 
-def _best_deletion(candidates: list[Candidate], scorer: _Scorer, rule: _Rule, batch_size: Optional[int]) -> Optional[tuple[Candidate, Scores]]:
-    """The acceptable candidate removing the most nodes (then scoring best, then first)."""
+def _best_deletion(
+    candidates: list[Candidate], scorer: _Scorer, rule: _Rule, batch_size: Optional[int], stop: Callable[[], bool] = lambda: False,
+) -> Optional[tuple[Candidate, Scores]]:
+    """The acceptable candidate removing the most nodes (then scoring best, then first); once
+    `stop()` says so, the best of the batches scored so far (a deadline must not wait for a round)."""
     ranked = sorted(range(len(candidates)), key=lambda i: (candidates[i].nodes, i))
     best: Optional[tuple[tuple[int, float, int], Candidate, Scores]] = None
     step = batch_size or max(1, len(ranked))
     for start in range(0, len(ranked), step):
         if best is not None and candidates[ranked[start]].nodes > best[1].nodes:
             break  # nothing left removes as much as the best acceptable one
+        if start and stop():
+            break
         chunk = ranked[start : start + step]
         trains = scorer.train([candidates[i].code for i in chunk])
         # Held-out scores only for what passes on the training episodes and could still win.
