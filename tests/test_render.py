@@ -345,6 +345,14 @@ def test_mp4_video_lasts_the_episode(name, request, tmp_path, gl_backend):
     assert seconds >= 3.0
 
 
+def test_a_video_under_a_time_budget_has_fewer_frames_and_still_plays_in_real_time(pendulum, pendulum_trace, tmp_path, gl_backend):
+    full = len(video_frame_steps(pendulum_trace.steps, pendulum_trace.control_timestep)[0])
+    path = render_video(pendulum, pendulum_trace, tmp_path / "short.mp4", **SIZE, max_seconds=1e-6)  # as few frames as allowed
+    frames, seconds = mp4_frames_and_seconds(path)
+    assert 2 <= frames < full
+    assert seconds >= 3.0
+
+
 def test_gif_video_and_a_frame_that_shows_the_pendulum(pendulum, pendulum_trace, tmp_path, gl_backend):
     path = render_video(pendulum, pendulum_trace, tmp_path / "pendulum.gif", **SIZE)
     with Image.open(path) as gif:
