@@ -27,6 +27,8 @@ Rules, in the order they apply:
     without fences, and only a version whose definition ends in the completion can be chosen,
     so a continuation whose body does not parse is rejected instead of falling back to a
     version the prompt showed. The prompt's helpers can be used by the new version.
+  * Type annotations are dropped (`x: T = v` becomes `x = v`): they do not change what the
+    policy computes, and the static check would read them as code.
 The result is formatted by ast.unparse, which drops comments; the caller keeps the raw text.
 """
 
@@ -94,8 +96,32 @@ def _extract(text: str, function_name: str, prefix: str) -> str:
         raise ExtractionError("empty policy body")
     module = ast.Module(body=_needed(chosen, statements), type_ignores=[])
     rename(module, {chosen.name: function_name})
+    _strip_annotations(module)
     _add_missing_imports(module)
     return ast.unparse(module)
+
+
+def _strip_annotations(module: ast.Module) -> None:
+    """Drop type annotations, in place: common in model answers (`obs: np.ndarray`), they never
+    change what the policy computes, and they would meet the static check (`.ndarray`)."""
+    for node in ast.walk(module):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            node.returns = None
+        elif isinstance(node, ast.arg):
+            node.annotation = None
+        for field in ("body", "orelse", "finalbody"):
+            statements = getattr(node, field, None)
+            if isinstance(statements, list) and any(isinstance(s, ast.AnnAssign) for s in statements):
+                kept = [_unannotated(s) if isinstance(s, ast.AnnAssign) else s for s in statements]
+                kept = [s for s in kept if s is not None]
+                setattr(node, field, kept or ([] if field == "orelse" else [ast.Pass()]))
+
+
+def _unannotated(statement: ast.AnnAssign) -> ast.stmt | None:
+    """`x: T = v` as `x = v`; a bare declaration `x: T` binds nothing and goes."""
+    if statement.value is None:
+        return None
+    return ast.copy_location(ast.Assign(targets=[statement.target], value=statement.value), statement)
 
 
 def _fenced_blocks(text: str) -> list[str]:

@@ -12,6 +12,8 @@ statically checked (`colmo.sandbox.check`).
 
 from __future__ import annotations
 
+import ast
+import textwrap
 from pathlib import Path
 from typing import Optional, Sequence
 
@@ -24,6 +26,8 @@ from colmo.sandbox.check import ForbiddenProgram, check_tree, parse_program
 MAX_ANSWER_CHARS = 100_000  # a 1024-token answer is about 4,000 characters
 MAX_NESTING = 100  # brackets; Python's own parser stops at 200
 MAX_PROGRAM_NODES = 20_000  # the paper's policies have a few hundred
+# What a raw completion body in a policy file continues: the signature every spec's policy has.
+COMPLETION_SIGNATURE = "def policy(obs):\n"
 
 
 class Unusable(ValueError):
@@ -77,7 +81,41 @@ def read_policy_file(path: str, allowed_imports: Sequence[str]) -> ParametricPro
         text = file.read_text(errors="replace")
     except OSError as error:
         raise ConfigError(f"cannot read policy_file {path}: {error.strerror}") from None
+    syntax = _syntax_error(text)
+    lines = text.splitlines()
+    # A typo inside a block of a `.py` file is the user's to fix: extraction would cut the
+    # definition before it (the rule for a truncated answer) and run a broken policy. Prose,
+    # the other thing that fails to parse in a saved answer, is not indented; a raw completion
+    # body is indented from its first line.
+    if syntax and lines[syntax[0] - 1 : syntax[0]] and lines[syntax[0] - 1][:1].isspace() and not text.lstrip("\n")[:1].isspace():
+        raise ConfigError(f"no usable policy in {path}: syntax error at line {syntax[0]}: {syntax[1]}")
     try:
         return read_program(text, allowed_imports)
-    except (Unusable, ForbiddenProgram) as error:
+    except ForbiddenProgram as error:
         raise ConfigError(f"no usable policy in {path}: {error}") from None
+    except Unusable as error:
+        unusable = error
+    if str(unusable).startswith("no function named"):
+        # A raw completion body: the docstring and body a model wrote after the `def` line.
+        body = text if text.lstrip("\n")[:1].isspace() else textwrap.indent(text, "    ")
+        try:
+            return read_program(body, allowed_imports, prefix=COMPLETION_SIGNATURE)
+        except (Unusable, ForbiddenProgram):
+            pass
+    if syntax and "no complete top-level definition" in str(unusable):  # a typo in the signature
+        raise ConfigError(f"no usable policy in {path}: syntax error at line {syntax[0]}: {syntax[1]}")
+    raise ConfigError(f"no usable policy in {path}: {unusable}")
+
+
+def _syntax_error(text: str) -> tuple[int, str] | None:
+    """The line and message of the first syntax error in `text`, if it has one (not looked for
+    in a text `read_program` refuses unparsed: its reason stands)."""
+    if len(text) > MAX_ANSWER_CHARS or nesting(text) > MAX_NESTING:
+        return None
+    try:
+        ast.parse(text)
+    except SyntaxError as error:
+        return error.lineno or 1, error.msg
+    except (ValueError, RecursionError, MemoryError):  # null bytes, absurd nesting: other reasons
+        pass
+    return None

@@ -4,7 +4,9 @@ from pathlib import Path
 
 import pytest
 
+from colmo.errors import ConfigError
 from colmo.extract import ExtractionError, extract_policy
+from colmo.intake import read_policy_file
 from colmo.program import parametrize
 
 
@@ -503,3 +505,35 @@ def test_an_answer_that_would_cost_quadratic_parsing_is_refused():
     # Every line opens a bracket: each start reads to the end before failing.
     with pytest.raises(ExtractionError, match="too irregular to read"):
         extract_policy("x = (\n" * 16_000)
+
+
+def test_annotations_are_stripped():
+    text = "```python\nimport numpy as np\nGAIN: float = 2.0\n\ndef policy_v2(obs: np.ndarray, *rest: float) -> float:\n    k: float = GAIN\n    n: int\n    return float(-k * obs[0])\n```"
+    assert extract_policy(text) == "import numpy as np\nGAIN = 2.0\n\ndef policy(obs, *rest):\n    k = GAIN\n    return float(-k * obs[0])"
+
+
+# The one-file tools (colmo-optimize, -evaluate, -simplify, -render) read policies with
+# `read_policy_file` (issue 20 part 6).
+@pytest.mark.parametrize("code, message", [
+    ("import numpy as np\n\ndef policy(obs):\n    x = obs[0]\n    return -2.0 * x)\n", r"syntax error at line 5: unmatched '\)'"),
+    ("import numpy as np\n\ndef policy(obs:\n    return -2.0 * obs[0]\n", r"syntax error at line 3: '\(' was never closed"),
+])
+def test_a_policy_file_with_a_syntax_error_says_where(tmp_path, code, message):
+    file = tmp_path / "policy.py"
+    file.write_text(code)
+    with pytest.raises(ConfigError, match=message):
+        read_policy_file(str(file), ["numpy", "math"])
+
+
+def test_an_annotated_policy_file_is_read(tmp_path):
+    file = tmp_path / "policy.py"
+    file.write_text("import numpy as np\n\ndef policy(obs: np.ndarray) -> float:\n    return float(-2.0 * obs[0])\n")
+    assert read_policy_file(str(file), ["numpy", "math"]).values == (-2.0,)
+
+
+@pytest.mark.parametrize("indent", ["    ", ""])
+def test_a_raw_completion_body_in_a_file_is_read(tmp_path, indent):
+    file = tmp_path / "completion.txt"
+    file.write_text(textwrap.indent('"""Damped proportional control."""\nangle = np.arctan2(obs[1], obs[0])\nreturn float(np.clip(-8.0 * angle - 1.2 * obs[2], -1.0, 1.0))\n', indent))
+    program = read_policy_file(str(file), ["numpy", "math"])
+    assert program.values == (-8.0, 1.2, -1.0, 1.0) and "def policy(obs):" in program.skeleton
