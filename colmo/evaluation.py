@@ -30,6 +30,11 @@ if TYPE_CHECKING:
 # sees observations and returns actions (what final scores use: a program cannot forge it).
 FAST, REFEREE = "fast", "referee"
 PROVISIONAL_TIMEOUT_S = 600.0  # before a task's time limits are known
+# What a reply from a sandbox may claim, past which it is forged: control steps per episode (the
+# longest task runs 1000; a spec's horizon 10,000 times longer is not a control task), and the
+# size of a return (a reward of 10**6 per step for 10**6 steps; past it a mean loses its digits).
+_MAX_EPISODE_STEPS = 10**7
+_MAX_ABS_RETURN = 1e12
 
 
 # One-sided 90 % quantiles of Student's t with 1, 2, ..., 30 degrees of freedom; past 30 the
@@ -160,12 +165,17 @@ class Evaluation:
         return json.dumps(fields).encode()
 
     @classmethod
-    def from_bytes(cls, data: bytes) -> "Evaluation":
-        """An evaluation sent by a sandbox process, checked field by field: it is data only.
-        `ValueError` if it is not a well-formed evaluation."""
-        reply = json.loads(data)
+    def from_bytes(cls, data: bytes, request: Optional[EvalRequest] = None) -> "Evaluation":
+        """An evaluation sent by a sandbox process, checked field by field: it is data only,
+        and with `request` it must fit it (at most one return per seed, at most
+        `_MAX_EPISODE_STEPS` control steps per seed, or the probe's `steps`). `ValueError`
+        (saying what is wrong) if it is not a well-formed evaluation."""
+        try:
+            reply = json.loads(data)
+        except RecursionError:  # nested deeper than the decoder's stack: no evaluation is
+            raise ValueError("nested too deeply") from None
         if not isinstance(reply, dict):
-            raise ValueError("malformed reply")
+            raise ValueError("not a JSON object")
         returns, failure, steps = reply.get("returns"), reply.get("failure"), reply.get("steps")
         raced_out, seconds, trace = reply.get("raced_out"), reply.get("seconds"), reply.get("trace")
         if (
@@ -174,7 +184,15 @@ class Evaluation:
             or type(raced_out) is not bool or type(seconds) is not float or not math.isfinite(seconds)
             or not isinstance(trace, (dict, type(None)))
         ):
-            raise ValueError("malformed reply")
+            raise ValueError("a field is missing or of the wrong type")
+        if any(abs(r) > _MAX_ABS_RETURN for r in returns):
+            raise ValueError(f"a return beyond {_MAX_ABS_RETURN:g}")
+        if request is not None:
+            episodes = max(len(request.seeds), 1)
+            if len(returns) > episodes:
+                raise ValueError(f"{len(returns)} returns for {episodes} episodes")
+            if steps > episodes * (request.steps or _MAX_EPISODE_STEPS):
+                raise ValueError(f"{'a huge number of' if steps > 10**18 else steps} control steps for {episodes} episodes")
         return cls(tuple(returns), failure_reason(failure) if failure else None, steps, raced_out, seconds, trace)
 
 

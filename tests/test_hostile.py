@@ -437,3 +437,26 @@ def test_a_search_flooded_with_hostile_programs_keeps_running_and_improving(tmp_
         assert record.status == "failed" and record.failure.startswith(reasons[record.raw]), (record.raw, record.failure)
     assert not any(tmp.iterdir()) and not processes_inside(tmp)
     assert canary.read_text() == CANARY_TEXT
+
+
+# Replies an escaped program forges in place of its evaluation (`Evaluation.to_bytes` replaced
+# in its own process, with the real builtins' setattr): the worker believes none of them.
+FORGED_REPLIES = {
+    "10**400 control steps": '{"returns": [1.0], "failure": null, "steps": 1' + "0" * 400 + ', "raced_out": false, "seconds": 0.0}',
+    "a NaN return": '{"returns": [NaN], "failure": null, "steps": 1, "raced_out": false, "seconds": 0.0}',
+    "a huge return": '{"returns": [1e300], "failure": null, "steps": 1, "raced_out": false, "seconds": 0.0}',
+    "more returns than episodes": '{"returns": [' + ", ".join(["1.0"] * 1000) + '], "failure": null, "steps": 1, "raced_out": false, "seconds": 0.0}',
+    "JSON nested 400,000 deep": "[" * 400_000,
+}
+
+
+@pytest.mark.parametrize("name", FORGED_REPLIES)
+def test_a_forged_reply_fails_the_program_not_the_worker(sandbox, baseline, escaped_spec, name):
+    forge = (
+        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.evaluation'].Evaluation, 'to_bytes', "
+        f"lambda self: {FORGED_REPLIES[name]!r}.encode())\n" + NOTHING
+    )
+    evaluation = sandbox.evaluate(forge, spec=escaped_spec, imports=("numpy", "math", "os", "sys", "ctypes", "socket"))
+    assert evaluation.failure is not None and evaluation.failure.startswith("program: malformed reply: "), evaluation.failure
+    assert evaluation.returns == () and evaluation.steps == 0
+    assert_unharmed(sandbox, baseline)

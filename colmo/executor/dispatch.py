@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import abc
 import concurrent.futures
+import hashlib
 import logging
 import queue
 import threading
@@ -148,7 +149,8 @@ class Dispatcher(abc.ABC):
                 log.warning("a worker was lost (%s); retrying its request (retry %d of %d)", reason, job.retries, self.max_retries)
                 self._jobs.put(job)  # before this job's task_done, so that close() waits for the retry
             else:
-                self._settle(job, Evaluation(failure=f"lost worker: {reason} after {job.retries} retries"))
+                program = hashlib.sha256(job.request.skeleton.encode()).hexdigest()[:12]
+                self._settle(job, Evaluation(failure=f"lost worker: {reason}; it held program {program}, after {job.retries} retries"))
 
     @staticmethod
     def _settle(job: _Job, evaluation: Evaluation) -> None:

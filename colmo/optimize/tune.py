@@ -41,6 +41,7 @@ TIMEOUT_FACTOR = 30.0
 # Relative difference between a fast-path and a referee score beyond which the fast path was
 # tampered with; the two run the same code on the same data, so honest programs agree exactly.
 _TAMPERING_TOLERANCE = 1e-9
+TAMPERING = "tampering:"  # how the failure of a program whose fast path the referee refutes begins
 
 
 class CandidateEvaluator:
@@ -183,8 +184,10 @@ def optimize_program(
         final = _refereed(evaluate.referee(params), fast)
         evaluations, steps = evaluations + 1, steps + final.steps
     code = instantiate(program.skeleton, params, digits=digits)
+    # A program failed as tampering forged its fast-path returns: none of them is its score.
+    initial = Evaluation(failure=final.failure) if final.failure and final.failure.startswith(TAMPERING) else tuning.initial
     return ProgramResult(
-        params, code, final, tuning.initial, evaluations, steps, tuning.raced_out, tuning.cut_short, time.perf_counter() - start, measure(code)
+        params, code, final, initial, evaluations, steps, tuning.raced_out, tuning.cut_short, time.perf_counter() - start, measure(code)
     )
 
 
@@ -193,7 +196,7 @@ def _refereed(referee: Evaluation, fast: Evaluation) -> Evaluation:
     if referee.failure or len(referee.returns) != len(fast.returns):
         return referee
     if not np.allclose(referee.returns, fast.returns, rtol=_TAMPERING_TOLERANCE, atol=_TAMPERING_TOLERANCE):
-        reason = f"tampering: the program reported a score of {fast.score:.6g}; the referee measured {referee.score:.6g}"
+        reason = f"{TAMPERING} the program's own run reported other returns than the referee's, which measured {referee.score:.6g}"
         return Evaluation(referee.returns, reason, referee.steps)
     return referee
 

@@ -111,11 +111,11 @@ class SandboxProcess:
             self.connection.send(request)
             if not self.connection.poll(request.timeout_s + _BACKSTOP_S):
                 raise WorkerLost(f"the worker did not answer within {request.timeout_s + _BACKSTOP_S:g} s")
-            return Evaluation.from_bytes(self.connection.recv_bytes(_MAX_REPLY_BYTES))
+            return Evaluation.from_bytes(self.connection.recv_bytes(_MAX_REPLY_BYTES), request)
         except (EOFError, OSError):
             raise WorkerLost(self.exit_reason()) from None
-        except (ValueError, KeyError, TypeError):
-            raise WorkerLost("the worker sent a malformed reply") from None
+        except (ValueError, KeyError, TypeError) as error:
+            raise WorkerLost(f"the worker sent a malformed reply: {error}") from None
 
     def kill(self) -> None:
         """Kill the worker and every process it started (its whole process group)."""
