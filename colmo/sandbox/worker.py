@@ -108,9 +108,9 @@ class Worker:
         if failure:
             return Evaluation(failure=failure)
         try:
-            return Evaluation.from_bytes(data)
-        except ValueError:
-            return Evaluation(failure="crash: the evaluation process sent a malformed reply")
+            return Evaluation.from_bytes(data, request)
+        except ValueError as error:  # the child ran the program: its reply is the program's
+            return Evaluation(failure=f"program: malformed reply: {error}")
 
     def _referee(self, envs: list[Environment], request: EvalRequest, deadline: float) -> Evaluation:
         observations_read, observations_write = os.pipe()  # worker -> child
