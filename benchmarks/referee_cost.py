@@ -5,8 +5,10 @@ side in alternating rounds on one sandbox worker (medians reported):
 - fast: one evaluation as GFO candidates get it (a fresh confined process runs the simulator
   and the policy);
 - referee: the same evaluation as final scores get it (the trusted worker runs the simulator,
-  the confined process only maps observations to actions, a pipe round trip per step);
-- unconfined: the simulator and the policy in this process, no sandbox at all (the floor);
+  the confined process only maps observations to actions; the episodes run in lockstep, a
+  pipe round trip per control step for all of them);
+- unconfined: the simulator and the policy in this process, no sandbox at all (the floor),
+  a fresh program instance per episode as in the sandbox;
 and the referee's share of a tuned program (`gfo.budget` fast evaluations, one referee).
 
     python benchmarks/referee_cost.py                       # every task, 5 rounds
@@ -24,9 +26,9 @@ from pathlib import Path
 from colmo.evaluation import FAST, REFEREE, EvalRequest
 from colmo.executor import LocalExecutor
 from colmo.program import parametrize
-from colmo.sandbox.namespace import load_policy
+from colmo.sandbox.namespace import Program
 from colmo.spec import load_spec
-from colmo.task import episode_seeds, evaluate_policy
+from colmo.task import episode_seeds, evaluate_program
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 MENAGERIE = Path(__file__).resolve().parent.parent.parent / "shared" / "menagerie"
@@ -38,7 +40,7 @@ def measure_task(executor: LocalExecutor, task: str, seeds: tuple[int, ...], rou
     spec = load_spec(f"{task}.py")
     program = parametrize((EXAMPLES / f"paper_{task}.py").read_text())
     env = spec.make_environment()
-    policy = load_policy(program.skeleton, spec.allowed_imports, program.values)  # the paper's code: trusted
+    trusted = Program(program.skeleton, spec.allowed_imports, program.values)  # the paper's code: trusted
 
     def sandboxed(mode: str) -> float:
         request = EvalRequest(str(spec.path), (), seeds, program.skeleton, program.values, spec.allowed_imports, mode=mode, timeout_s=600)
@@ -48,7 +50,7 @@ def measure_task(executor: LocalExecutor, task: str, seeds: tuple[int, ...], rou
 
     def unconfined() -> float:
         start = time.perf_counter()
-        evaluate_policy(env, policy, seeds)
+        evaluate_program(env, trusted.new_policy, seeds)
         return time.perf_counter() - start
 
     measures = {"fast": lambda: sandboxed(FAST), "referee": lambda: sandboxed(REFEREE), "unconfined": unconfined}

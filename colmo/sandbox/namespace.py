@@ -106,14 +106,21 @@ def template(name: str) -> types.ModuleType:
     return cached
 
 
+# Per template module (by id: templates live as long as the process): the names of its
+# submodules, found once, so that a copy per episode is a dictionary copy and not a scan.
+_SUBMODULE_NAMES: dict[int, tuple[str, ...]] = {}
+
+
 def _copy_tree(template_module: types.ModuleType) -> types.ModuleType:
     """A private copy of a module tree: what a program assigns to its copy stays there."""
     copy = types.ModuleType(template_module.__name__)
     namespace = vars(copy)
     namespace.update(vars(template_module))
-    for name, value in namespace.items():
-        if isinstance(value, types.ModuleType):
-            namespace[name] = _copy_tree(value)
+    names = _SUBMODULE_NAMES.get(id(template_module))
+    if names is None:
+        names = _SUBMODULE_NAMES[id(template_module)] = tuple(name for name, value in namespace.items() if isinstance(value, types.ModuleType))
+    for name in names:
+        namespace[name] = _copy_tree(namespace[name])
     return copy
 
 
@@ -122,17 +129,44 @@ def _copy_tree(template_module: types.ModuleType) -> types.ModuleType:
 _GLOBAL_RANDOM_FUNCTIONS = {"seed": "seed", "ranf": "random_sample", "sample": "random_sample"}
 
 
+_RANDOM_METHODS: dict[str, str] = {}
+
+
+def _random_methods(namespace: dict[str, Any]) -> dict[str, str]:
+    """The names of a `numpy.random` copy that draw from the global generator, each with the
+    generator's method it stands for (found once per process)."""
+    if not _RANDOM_METHODS:
+        global_generator = np.random.mtrand._rand
+        for name, value in namespace.items():
+            if getattr(value, "__self__", None) is global_generator:
+                _RANDOM_METHODS[name] = value.__name__
+            elif name in _GLOBAL_RANDOM_FUNCTIONS:
+                _RANDOM_METHODS[name] = _GLOBAL_RANDOM_FUNCTIONS[name]
+    return _RANDOM_METHODS
+
+
 def _private_random(random_copy: types.ModuleType, seed: int) -> None:
     """Bind a copy of `numpy.random` to a generator of its own, seeded as `np.random.seed(seed)`
-    seeds the global one (same draws), instead of the process's global generator."""
-    generator = np.random.RandomState(seed % 2**32)
-    global_generator = np.random.mtrand._rand
+    seeds the global one (same draws), instead of the process's global generator. Seeding costs
+    as much as a short episode's steps, so the generator is made at the first draw: until then
+    each function is a stand-in that makes it, rebinds the copy and draws."""
     namespace = vars(random_copy)
-    for name, value in namespace.items():
-        if getattr(value, "__self__", None) is global_generator:
-            namespace[name] = getattr(generator, value.__name__)
-        elif name in _GLOBAL_RANDOM_FUNCTIONS:
-            namespace[name] = getattr(generator, _GLOBAL_RANDOM_FUNCTIONS[name])
+    methods = _random_methods(namespace)
+    generator: list[np.random.RandomState] = []
+
+    def bound(method: str) -> Callable[..., Any]:
+        if not generator:
+            generator.append(np.random.RandomState(seed % 2**32))
+            for name, each in methods.items():
+                if namespace[name] is stand_ins[name]:  # not one the program replaced
+                    namespace[name] = getattr(generator[0], each)
+        return getattr(generator[0], method)
+
+    def stand_in(method: str) -> Callable[..., Any]:
+        return lambda *args, **kwargs: bound(method)(*args, **kwargs)
+
+    stand_ins = {name: stand_in(method) for name, method in methods.items()}
+    namespace.update(stand_ins)
 
 
 def _guarded_import(allowed: frozenset[str], seed: int) -> Callable[..., types.ModuleType]:
