@@ -38,7 +38,7 @@ log = logging.getLogger("colmo.search")
 
 SAFETY = 1.5  # a loaded machine runs the finish this much slower than the calibration measured
 FINISH_SHARE = 0.4  # of a time limit, at most, for the finish when the full work does not fit
-_RENDER_FIXED_S = 6.0  # matplotlib's import, the plot, ffmpeg's start: the render's cost besides frames
+_RENDER_FIXED_S = 10.0  # matplotlib's import, the plot, ffmpeg's start: 8 s measured on 2 loaded cores
 _VIDEO_S = 20.0  # seconds of frames for a full-size video at its full frame rate, at most
 _VIDEO_MIN_S = 2.0  # seconds of frames for a small video at a low frame rate
 _SMALL = (320, 240)
@@ -169,13 +169,13 @@ def finish(
 def _render(cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float, plan: FinishPlan) -> dict:
     """The video and plot of the best policy, its frames in the time left; the summary's `media`."""
     left = _left(until)
-    if left < _RENDER_FIXED_S:
+    trace_seconds = plan.render_seconds - plan.video_seconds - _RENDER_FIXED_S  # the episode the referee records
+    if left < _RENDER_FIXED_S + trace_seconds + _VIDEO_MIN_S:
         log.warning("no time left for the video and plot of the best policy (search.max_seconds)")
         return {}
     from colmo.render import render_policy  # matplotlib and the renderer: only when asked for
 
     width, height = plan.size
-    trace_seconds = plan.render_seconds - plan.video_seconds - _RENDER_FIXED_S  # the episode the referee records
     video_seconds = None if math.isinf(until) else max(min(plan.video_seconds, left - _RENDER_FIXED_S - trace_seconds), _VIDEO_MIN_S)
     title = f"{cfg.task.name}: best policy (sample {record.sample}, training score {record.score:.1f})"
     media = render_policy(executor, heldout, record.skeleton, record.params, run_dir, title, width=width, height=height, video_seconds=video_seconds)

@@ -93,7 +93,8 @@ def render_video(
     is written at `path` with its suffix changed to `.gif`. `fps` is the target frame rate
     (`video_frame_steps`). `camera` is a model camera (id or name) or an `MjvCamera`; by default
     `default_camera(env.model)`. With `max_seconds`, the first frame is timed and the frame rate
-    lowered (every k-th frame, still in real time) so that the frames take about that long. Raises `NoGLError` if no OpenGL backend works, `ValueError`
+    lowered (every k-th frame, still in real time) so that the frames take about that long, and
+    the video ends early if they take longer. Raises `NoGLError` if no OpenGL backend works, `ValueError`
     for a trace that does not fit the model.
     """
     if trace.states is None:
@@ -129,11 +130,16 @@ def render_video(
     with mujoco.Renderer(model, height, width) as renderer:
         started = time.monotonic()
         first = frame(renderer, frame_steps[0])
+        rest: Iterator[int] = iter(frame_steps[1:])
         if max_seconds is not None and len(frame_steps) > 1:
-            allowed = max(2, int(max_seconds / max(time.monotonic() - started, 1e-3)))
+            # Twice the first frame's time per frame: encoding it costs about as much again.
+            allowed = max(2, int(max_seconds / (2 * max(time.monotonic() - started, 1e-3))))
             thin = math.ceil(len(frame_steps) / allowed)
             frame_steps, frame_rate = frame_steps[::thin], frame_rate / thin
-        frames = itertools.chain([first], (frame(renderer, step) for step in frame_steps[1:]))
+            # Should the machine slow down, the video ends early rather than the run late.
+            late = itertools.takewhile(lambda _: time.monotonic() < started + max_seconds, frame_steps[2:])
+            rest = itertools.chain(frame_steps[1:2], late)  # two frames at least: a video, not a still
+        frames = itertools.chain([first], (frame(renderer, step) for step in rest))
         return _write(frames, path, width, height, frame_rate)
 
 
