@@ -122,7 +122,7 @@ class Search:
         # The limit counts from the process's start (imports and Hydra included); the search's
         # own deadline comes earlier, once the calibration tells what the finish will cost.
         self.end = self.start - process_seconds() + cfg.search.max_seconds if cfg.search.max_seconds else float("inf")
-        self.deadline = self.end
+        self.deadline = self.start + 0.5 * (self.end - self.start)  # the starter's tuning gets half the time at most
         self.episode_seconds = 0.0  # one referee episode of the starter: what the finish costs per episode
         self.estimated_seconds: Optional[float] = None  # the search by max_samples, before the first batch
         self.stopping = threading.Event()  # programs in flight stop tuning at their next candidate
