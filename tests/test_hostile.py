@@ -460,3 +460,24 @@ def test_a_forged_reply_fails_the_program_not_the_worker(sandbox, baseline, esca
     assert evaluation.failure is not None and evaluation.failure.startswith("program: malformed reply: "), evaluation.failure
     assert evaluation.returns == () and evaluation.steps == 0
     assert_unharmed(sandbox, baseline)
+
+
+def test_a_tampering_programs_fast_score_is_not_its_initial_score(sandbox, baseline, escaped_spec):
+    """The fast path's returns of a program the referee refutes are forged: a tuned program's
+    result keeps neither them nor the forged number in its reason."""
+    from colmo.evaluation import Evaluator
+    from colmo.optimize.tune import CandidateEvaluator, optimize_program
+    from colmo.program import parametrize
+
+    forge = (
+        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.task'], 'rollout', lambda env, policy, seed, steps=None: (float('400002.6'), int('1000')))\n"
+        + NOTHING
+    )
+    program = parametrize(forge)  # the module-level forgery is what intake would drop: an escape's
+    evaluator = Evaluator.for_task(load_spec(escaped_spec), {}, episode_seeds(0, 2), MEMORY_MB, TIMEOUT_S)
+    gfo = compose("optimize", "gfo=oneplusone", "gfo.budget=3", "policy_file=unused.py").gfo
+    result = optimize_program(program, CandidateEvaluator(sandbox.executor, evaluator, program.skeleton), gfo, seed=0)
+    assert result.failure is not None and result.failure.startswith("tampering: "), result.failure
+    assert result.initial.failure == result.failure and result.initial.returns == ()
+    assert "400002" not in result.failure
+    assert_unharmed(sandbox, baseline)
