@@ -473,11 +473,26 @@ def test_a_tampering_programs_fast_score_is_not_its_initial_score(sandbox, basel
         "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.task'], 'rollout', lambda env, policy, seed, steps=None: (float('400002.6'), int('1000')))\n"
         + NOTHING
     )
-    program = parametrize(forge)  # the module-level forgery is what intake would drop: an escape's
+    program = parametrize(forge)  # not read_program: intake drops module-level statements, an escape would not
     evaluator = Evaluator.for_task(load_spec(escaped_spec), {}, episode_seeds(0, 2), MEMORY_MB, TIMEOUT_S)
     gfo = compose("optimize", "gfo=oneplusone", "gfo.budget=3", "policy_file=unused.py").gfo
     result = optimize_program(program, CandidateEvaluator(sandbox.executor, evaluator, program.skeleton), gfo, seed=0)
     assert result.failure is not None and result.failure.startswith("tampering: "), result.failure
     assert result.initial.failure == result.failure and result.initial.returns == ()
     assert "400002" not in result.failure
+    assert_unharmed(sandbox, baseline)
+
+
+def test_a_child_that_pre_sends_its_actions_and_stops_reading_times_out(sandbox, baseline, escaped_spec):
+    """A child of the referee writes a thousand steps' actions for five episodes ahead, then
+    never reads: the worker's writes of observations fill the pipe, and its deadline ends the
+    evaluation (a `timeout:`, not a worker lost to the coordinator's backstop)."""
+    frames = "b'A' + (40).to_bytes(4, 'little') + bytes(40)"  # five episodes' zero actions
+    presend = (
+        "import os, ctypes\nfor fd in range(3, 64):\n    try:\n        os.write(fd, (" + frames + ") * 1000)\n"
+        "    except OSError:\n        pass\nctypes.CDLL(None).pause()\n"
+    )
+    imports = ("numpy", "math", "os", "sys", "ctypes", "socket")
+    evaluation = sandbox.evaluate(presend + NOTHING, spec=escaped_spec, episodes=5, imports=imports, mode=REFEREE)
+    assert evaluation.failure is not None and evaluation.failure.startswith("timeout: "), evaluation.failure
     assert_unharmed(sandbox, baseline)
