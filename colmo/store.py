@@ -75,6 +75,9 @@ class ProgramStore:
     def __init__(self, path: Path | str):
         self.path = Path(path)
         try:
+            # Private from the start: it holds programs' failure messages and the run's settings.
+            # SQLite creates its -wal and -shm files with the database's mode.
+            os.close(os.open(self.path, os.O_RDONLY | os.O_CREAT, 0o600))
             self.connection = sqlite3.connect(self.path, timeout=30, check_same_thread=False)
             self.connection.execute("PRAGMA journal_mode=WAL")
             self.connection.execute("PRAGMA synchronous=NORMAL")
@@ -86,6 +89,8 @@ class ProgramStore:
             self.connection.commit()
         except sqlite3.DatabaseError as error:
             raise ConfigError(f"{self.path} is not a colmo program store ({error})") from None
+        except OSError as error:
+            raise ConfigError(f"cannot open the program store {self.path}: {error.strerror}") from None
         # Program threads store their results as they finish: one writer at a time.
         self._lock = threading.Lock()
 
@@ -174,7 +179,7 @@ def open_run(run_dir: Path, settings: Mapping[str, Any], resume: bool) -> tuple[
     else:
         path = run_dir / STORE_FILE
         try:
-            run_dir.mkdir(parents=True, exist_ok=True)
+            run_dir.mkdir(mode=0o700, parents=True, exist_ok=True)  # private where colmo creates it
         except OSError as error:
             raise ConfigError(f"cannot create the run directory {run_dir}: {error.strerror}") from None
     lock = RunLock(run_dir)

@@ -149,15 +149,6 @@ def _return_if_equal(values: list[int], action: int) -> list[Instruction]:
     return program
 
 
-def _deny_open_for_writing(flags_argument: int) -> list[Instruction]:
-    return [
-        _statement(BPF_LD_W_ABS, _arg_low(flags_argument)),
-        _jump(BPF_JSET_K, syscalls.OPEN_WRITE_FLAGS, 0, 1),
-        _statement(BPF_RET_K, _errno(errno.EPERM)),
-        _statement(BPF_RET_K, SECCOMP_RET_ALLOW),
-    ]
-
-
 def _allow_only_threads() -> list[Instruction]:
     # clone's flags are its first argument on x86_64 and on aarch64; only the low word is used.
     return [
@@ -177,6 +168,15 @@ def _deny_commands(command_argument: int, commands: tuple[int, ...]) -> list[Ins
     ]
 
 
+def _allow_commands(command_argument: int, commands: tuple[int, ...]) -> list[Instruction]:
+    # The kernel reads an ioctl command as 32 bits, so the high word is irrelevant.
+    return [
+        _statement(BPF_LD_W_ABS, _arg_low(command_argument)),
+        *_return_if_equal(list(commands), SECCOMP_RET_ALLOW),
+        _statement(BPF_RET_K, _errno(errno.EPERM)),
+    ]
+
+
 def _deny_setting_limits() -> list[Instruction]:
     # prlimit64(pid, resource, new_limit, old_limit): reading (new_limit NULL) stays allowed.
     return [
@@ -191,11 +191,9 @@ def _deny_setting_limits() -> list[Instruction]:
 
 def argument_checks() -> dict[str, list[Instruction]]:
     return {
-        "open": _deny_open_for_writing(1),
-        "openat": _deny_open_for_writing(2),
         "clone": _allow_only_threads(),
         "fcntl": _deny_commands(1, syscalls.DENIED_FCNTL_COMMANDS),
-        "ioctl": _deny_commands(1, syscalls.DENIED_IOCTL_COMMANDS),
+        "ioctl": _allow_commands(1, syscalls.ALLOWED_IOCTL_COMMANDS),
         "prlimit64": _deny_setting_limits(),
     }
 

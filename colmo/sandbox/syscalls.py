@@ -20,7 +20,7 @@ COMMON_NEW_SYSCALLS = {
     "openat2": 437, "pidfd_getfd": 438, "process_madvise": 440, "mount_setattr": 442,
     "quotactl_fd": 443, "memfd_secret": 447, "process_mrelease": 448, "fchmodat2": 452,
     "lsm_set_self_attr": 460, "setxattrat": 463, "removexattrat": 466, "open_tree_attr": 467,
-    "file_setattr": 469,
+    "cachestat": 451, "file_setattr": 469,
 }  # fmt: skip
 
 # Only the calls this filter names: arch/x86/entry/syscalls/syscall_64.tbl, scripts/syscall.tbl.
@@ -59,9 +59,11 @@ SYSCALL_NUMBERS: dict[str, dict[str, int]] = {
         "process_vm_readv": 310, "process_vm_writev": 311, "kcmp": 312, "finit_module": 313,
         "sched_setattr": 314, "renameat2": 316, "seccomp": 317, "memfd_create": 319,
         "kexec_file_load": 320, "bpf": 321, "execveat": 322, "userfaultfd": 323,
+        "sync": 162, "syncfs": 306, "fadvise64": 221, "io_setup": 206,
         **COMMON_NEW_SYSCALLS,
     },
     "aarch64": {
+        "io_setup": 0, "sync": 81, "syncfs": 267, "fadvise64": 223,
         "setxattr": 5, "lsetxattr": 6, "fsetxattr": 7, "removexattr": 14, "lremovexattr": 15,
         "fremovexattr": 16, "fcntl": 25, "inotify_init1": 26, "ioctl": 29, "ioprio_set": 30,
         "flock": 32, "mknodat": 33, "mkdirat": 34, "unlinkat": 35, "symlinkat": 36,
@@ -103,8 +105,12 @@ DENIED: dict[str, tuple[str, ...]] = {
         "symlinkat", "mknod", "mknodat", "chmod", "fchmod", "fchmodat", "fchmodat2", "chown",
         "fchown", "lchown", "fchownat", "utime", "utimes", "futimesat", "utimensat",
         "setxattr", "lsetxattr", "fsetxattr", "setxattrat", "removexattr", "lremovexattr",
-        "fremovexattr", "removexattrat", "file_setattr", "flock",
+        "fremovexattr", "removexattrat", "file_setattr", "flock", "sync", "syncfs",
     ),
+    # A confined child needs no file system after the fork: every file it reads was opened
+    # (or imported) in the zygote before it, so opening anything, read-only included, is
+    # refused (a program with the real `open` cannot read ~/.netrc nor /proc/<pid>/environ).
+    "file system reads": ("open", "openat", "fadvise64", "cachestat", "io_setup"),
     "networking": (
         "socket", "socketpair", "connect", "bind", "listen", "accept", "accept4", "sendto",
         "sendmsg", "sendmmsg", "recvfrom", "recvmsg", "recvmmsg", "shutdown", "getsockname",
@@ -144,17 +150,8 @@ DENIED: dict[str, tuple[str, ...]] = {
 }  # fmt: skip
 
 # Their arguments live in a struct the filter cannot read: ENOSYS makes glibc fall back to
-# openat and clone, whose arguments it checks.
+# openat (refused) and clone, whose arguments it checks.
 UNSUPPORTED = ("openat2", "clone3")
-
-# open/openat flags that write, create or truncate (same values on x86_64 and aarch64).
-O_WRONLY = 0o1
-O_RDWR = 0o2
-O_CREAT = 0o100
-O_TRUNC = 0o1000
-O_APPEND = 0o2000
-O_TMPFILE_BIT = 0o20000000  # __O_TMPFILE; O_TMPFILE is this bit with O_DIRECTORY
-OPEN_WRITE_FLAGS = O_WRONLY | O_RDWR | O_CREAT | O_TRUNC | O_APPEND | O_TMPFILE_BIT
 
 CLONE_THREAD = 0x00010000
 CLONE_NAMESPACES = (
@@ -178,10 +175,16 @@ DENIED_FCNTL_COMMANDS = (
     38,  # F_OFD_SETLKW
     1024,  # F_SETLEASE
     1026,  # F_NOTIFY
+    1031,  # F_SETPIPE_SZ: pins kernel memory, and resizes the reply pipe the worker reads
 )
-DENIED_IOCTL_COMMANDS = (
-    0x5412,  # TIOCSTI
-    0x541C,  # TIOCLINUX
-    0x8901,  # FIOSETOWN
-    0x8902,  # SIOCSPGRP
+# Every other ioctl is refused (FS_IOC_SETFLAGS, FS_IOC_SETVERSION set inode attributes even
+# through a read-only descriptor; TIOCSTI injects terminal input). These only ask: Python's
+# io probes TCGETS on each stream it opens (isatty), and FIONREAD/FIONBIO/FIOCLEX are harmless
+# on the descriptors the child holds.
+ALLOWED_IOCTL_COMMANDS = (
+    0x5401,  # TCGETS
+    0x541B,  # FIONREAD
+    0x5421,  # FIONBIO
+    0x5451,  # FIOCLEX
+    0x5450,  # FIONCLEX
 )

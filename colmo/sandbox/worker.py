@@ -43,6 +43,7 @@ from colmo.sandbox.referee import LOCKSTEP, RefereeTimeout, referee_evaluation, 
 from colmo.task import Environment, evaluate_program
 
 _PR_SET_PDEATHSIG = 1
+_PR_SET_DUMPABLE = 4
 _CLONE_NEWUSER, _CLONE_NEWNET = 0x10000000, 0x40000000
 _MAX_REPLY_BYTES = 1 << 20
 _EXIT_GRACE_S = 1.0
@@ -198,10 +199,13 @@ def _reap(pid: int, request: EvalRequest, deadline: float, timed_out: bool) -> s
 
 
 def _isolate(parent_pid: int) -> None:
-    """Start-up hardening of the worker itself: it dies with the coordinator, and has no
-    network where the kernel lets it leave the host's network namespace."""
+    """Start-up hardening of the worker itself: it dies with the coordinator, no same-uid
+    process (a child whose filter fell, where there is no user drop) can open its /proc/<pid>/
+    mem, environ or fd entries, and it has no network where the kernel lets it leave the host's
+    network namespace."""
     libc = ctypes.CDLL(None, use_errno=True)
     libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    libc.prctl(_PR_SET_DUMPABLE, 0, 0, 0, 0)
     if os.getppid() != parent_pid:  # the coordinator died before prctl took effect
         os._exit(1)
     # Best effort: needs root, or unprivileged user namespaces for the second form.
