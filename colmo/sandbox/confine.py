@@ -19,9 +19,9 @@ under root's 0700 home directory (where the Python installation may live) either
 before `confine()`: it refuses setting them afterwards. Supervisors should kill a child with
 SIGKILL: it may ignore other signals.
 
-What the child can still do, by design: read every world-readable file and world-readable
-/proc entry (other processes' cmdline, for instance), so secrets must not sit in files of mode
-0644 nor on command lines; use the CPU and memory its rlimits allow; start threads; write to
+What the child can still do, by design: read what it already holds open (nothing else: the
+filter refuses every open, read-only included, so whatever it needs must be imported or opened
+in the zygote before the fork); see file names and metadata (stat, getdents); use the CPU and memory its rlimits allow; start threads; write to
 the descriptors it kept. Other processes running as the unprivileged uid (nobody, by default)
 share it with the child: pass a uid nothing else uses where that matters.
 
@@ -45,7 +45,8 @@ apply and `Confinement.warnings` says what is missing:
    zygote (it is tied to the forking thread: fork from the zygote's main thread). If the parent
    died before the signal was armed, the child sends it to itself at once.
 4. `seccomp`: the system-call filter of `colmo.sandbox.seccomp` (file writes, networking, new
-   processes, signals to others, privilege and kernel surfaces refused with EPERM).
+   processes, signals to others, privilege and kernel surfaces refused with EPERM; every open
+   refused too, so a non-root run, which has no user drop, still reads no file of the user).
 
 The worker logs the layers of its first evaluation once, and warns once about any the kernel
 refused here; the rest still apply.

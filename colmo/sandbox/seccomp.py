@@ -15,8 +15,10 @@ thread gets it (threads and children inherit it, and it cannot be removed):
   glibc falls back to `openat` and `clone`, which are checked;
 * answers EPERM, so that the program sees an error and reports it, to:
 
-  - file-system writes: `open` and `openat` whose flags ask for O_WRONLY, O_RDWR, O_CREAT,
-    O_TRUNC, O_APPEND or O_TMPFILE (so also writes to /proc and /sys files), `creat`,
+  - the file system, reads included: `open` and `openat` with any flags (the child runs on
+    what the zygote opened and imported before the fork, so a program that reached the real
+    `open` reads neither ~/.netrc nor /proc/<pid>/environ, mem or fd of a same-uid process),
+    `posix_fadvise`, `cachestat`, `io_setup`; and writes: `creat`, `sync`, `syncfs`,
     `truncate`, `ftruncate`, `fallocate`, `rename`, `renameat`, `renameat2`, `unlink`,
     `unlinkat`, `rmdir`, `mkdir`, `mkdirat`, `link`, `linkat`, `symlink`, `symlinkat`,
     `mknod`, `mknodat`, `chmod`, `fchmod`, `fchmodat`, `fchmodat2`, `chown`, `fchown`,
@@ -24,7 +26,9 @@ thread gets it (threads and children inherit it, and it cannot be removed):
     `lsetxattr`, `fsetxattr`, `setxattrat`, `removexattr`, `lremovexattr`, `fremovexattr`,
     `removexattrat`, `file_setattr`; and locks, which would let a child stall the
     coordinator's database while it lives: `flock`, `fcntl` F_SETLK, F_SETLKW, F_OFD_SETLK,
-    F_OFD_SETLKW, F_SETLEASE, F_NOTIFY;
+    F_OFD_SETLKW, F_SETLEASE, F_NOTIFY, F_SETPIPE_SZ; every `ioctl` but TCGETS (isatty),
+    FIONREAD, FIONBIO, FIOCLEX, FIONCLEX (FS_IOC_SETFLAGS and FS_IOC_SETVERSION change inode
+    attributes through a read-only descriptor);
   - networking, all of the socket API: `socket`, `socketpair`, `connect`, `bind`, `listen`,
     `accept`, `accept4`, `sendto`, `sendmsg`, `sendmmsg`, `recvfrom`, `recvmsg`, `recvmmsg`,
     `shutdown`, `getsockname`, `getpeername`, `setsockopt`, `getsockopt` (the reply goes
@@ -36,7 +40,7 @@ thread gets it (threads and children inherit it, and it cannot be removed):
     `migrate_pages`, `move_pages`, `kill`, `tkill`, `tgkill`, `rt_sigqueueinfo`,
     `rt_tgsigqueueinfo`, `pidfd_open`, `pidfd_send_signal`, `pidfd_getfd`, `setpgid`,
     `setsid` (it stays in the group its supervisor kills), and signal delivery through
-    descriptors: `fcntl` F_SETOWN, F_SETOWN_EX, F_SETSIG and `ioctl` FIOSETOWN, SIOCSPGRP;
+    descriptors: `fcntl` F_SETOWN, F_SETOWN_EX, F_SETSIG;
   - privileges: `setuid`, `setgid`, `setreuid`, `setregid`, `setresuid`, `setresgid`,
     `setfsuid`, `setfsgid`, `setgroups`, `capset`, `prctl` (all of it: PR_SET_DUMPABLE
     back to 1 would reopen /proc and ptrace), `seccomp` (no further filters),
@@ -50,8 +54,7 @@ thread gets it (threads and children inherit it, and it cannot be removed):
     `mq_getsetattr`, `shmget`, `shmat`, `shmctl`, `shmdt`, `semget`, `semop`,
     `semtimedop`, `semctl`, `msgget`, `msgsnd`, `msgrcv`, `msgctl`, `keyctl`, `add_key`,
     `request_key` (the session keyring is shared with the parent), `inotify_init`,
-    `inotify_init1`, `fanotify_init`, and terminal input injection: `ioctl` TIOCSTI,
-    TIOCLINUX;
+    `inotify_init1`, `fanotify_init`;
   - kernel surfaces (exploit material, or root-only): `bpf`, `perf_event_open`,
     `userfaultfd`, `io_uring_setup`, `io_uring_enter`, `io_uring_register` (io_uring does
     file and network operations that seccomp never sees), `unshare`, `setns`, `mount`,
@@ -71,10 +74,8 @@ already has, pipe2, eventfd, epoll, poll, clock_gettime, nanosleep, getrandom, r
 on itself, sched_yield, sched_getaffinity, rseq, exit, exit_group); `clone` with
 CLONE_THREAD, because OpenBLAS restarts its thread pool in a forked child (refused, it
 calls exit(), which then hangs) and a thread has exactly the rights of its process (same
-filter, same credentials, same rlimits); read-only `open`/
-`openat`, stat, getdents, readlink, access (confidentiality is the user drop's job, and
-numpy and the C library read /proc, /sys and /etc at run time); `ioctl` other than the
-commands above; mmap/mprotect with PROT_EXEC: a program that reaches native code can
+filter, same credentials, same rlimits); stat, getdents, readlink, access (names and
+metadata, no contents); mmap/mprotect with PROT_EXEC: a program that reaches native code can
 already call any libc function, so shellcode would gain nothing, and refusing executable
 memory breaks libffi closures and loaders; `landlock_*` (it can only restrict).
 """
