@@ -50,6 +50,7 @@ def test_a_request_that_keeps_losing_its_worker_fails_with_the_reason():
         kill_worker_mid_evaluation(executor)
         [result] = future.result()
     assert result.failure.startswith("lost worker: the worker was killed (SIGKILL)") and result.failure.endswith("after 1 retries")
+    assert "; it held program " in result.failure  # which program held the lost worker
 
 
 def test_search_survives_workers_killed_at_random_moments(tmp_path):
