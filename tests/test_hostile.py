@@ -250,6 +250,10 @@ ESCAPES = {
     "delete a file": "os.unlink('{canary}')",
     "read the coordinator's secrets": "data = os.read(os.open('/proc/{coordinator}/environ', os.O_RDONLY), 10 ** 6)",
     "read its worker's memory": "data = os.read(os.open('/proc/' + str(os.getppid()) + '/mem', os.O_RDONLY), 1)",
+    "read its worker's pipes": "data = os.read(os.open('/proc/' + str(os.getppid()) + '/fd/0', os.O_RDONLY), 1)",
+    # The canary stands for ~/.netrc: a file the user (and so the child) may read.
+    "read a user's file with the real open": "data = sys.modules['builtins'].open('{canary}').read()",
+    "read a user's file read-only": "data = os.read(os.open('{canary}', os.O_RDONLY), 100)",
     "signal the worker": "os.kill(os.getppid(), 9)",
     "signal the coordinator": "os.kill({coordinator}, 15)",
     "new process": "libc = ctypes.CDLL(None, use_errno=True)\n    libc.fork() == -1 and sys.exit(ctypes.get_errno())",
