@@ -188,3 +188,37 @@ def test_mean_std_is_the_sample_std_and_a_lone_mean():
     assert mean_std([1.0, 3.0]) == "2.0 ± 1.4"
     assert mean_std([591.0]) == "591.0"
     assert mean_std([12, 20], 0) == "16 ± 6"
+
+
+def test_the_latest_sweep_is_compared_alone_with_a_legend_and_markers(store):
+    """A 4-job sweep next to an unrelated run and an older sweep: only its 4 jobs count, by
+    default and by name; the figure (the seam `figure`) names each variant in a legend, one
+    colour each, and a run of one batch is a visible marker."""
+    from colmo.report import group
+    from colmo.report.figure import figure
+
+    _, client = store
+    experiment_id = client.create_experiment("swept")
+    older = client.create_run(experiment_id, start_time=START, run_name="swept-sweep-1", tags={"colmo.sweep": "old"}).info.run_id
+    log_run(client, experiment_id, 1, Logged("old-job", "none", 0, [5.0, 6.0], None), tags={"mlflow.parentRunId": older})
+    parent = client.create_run(experiment_id, start_time=START + 120_000, run_name="swept-sweep-2", tags={"colmo.sweep": "new"}).info.run_id
+    jobs = [Logged("n0", "none", 0, [1.0, 2.0], None), Logged("n1", "none", 1, [3.0, 4.0], None),
+            Logged("o0", "oneplusone", 0, [5.0], None), Logged("o1", "oneplusone", 1, [6.0, 9.0], None)]
+    for index, job in enumerate(jobs, start=3):
+        log_run(client, experiment_id, index, job, tags={"mlflow.parentRunId": parent})
+    log_run(client, experiment_id, 9, Logged("unrelated", "none", 5, [7.0, 8.0], None))
+    for sweep in ("latest", "swept-sweep-2"):
+        reading = read_runs(client, ["swept"], sweep=sweep)
+        assert sorted(c.run.info.run_name for c in reading.curves) == ["n0", "n1", "o0", "o1"] and not reading.left_out
+    assert [c.run.info.run_name for c in read_runs(client, ["swept"], sweep="swept-sweep-1").curves] == ["old-job"]
+    every = read_runs(client, ["swept"], sweep="all")  # old-job repeats n0's settings and seed: left out
+    assert len(every.curves) == 5 and [run.info.run_name for run, _ in every.left_out] == ["old-job"]
+    with pytest.raises(ValueError, match="no sweep named 'nope'"):
+        read_runs(client, ["swept"], sweep="nope")
+    ax = figure(group(read_runs(client, ["swept"]).curves)).axes[0]
+    legend = ax.get_legend()
+    assert [text.get_text() for text in legend.get_texts()] == ["no GFO (2 seeds)", "oneplusone, budget 3 (2 seeds)", "target 400"]
+    handles = legend.legend_handles
+    assert handles[0].get_color() != handles[1].get_color()
+    assert any(line.get_marker() == "o" and len(line.get_xdata()) == 1 for line in ax.get_lines())  # o0's single point
+    assert len(ax.collections) == 2  # a band per variant of two seeds

@@ -1,15 +1,18 @@
 """The report that compares search variants, read back from MLflow: the paper's Table I, its
 Fig. 4 best-so-far curves, and the best policy of each variant.
 
-    colmo-report experiment=pendulum [experiment=cheetah ...] [axis=samples|evaluations|seconds]
-                 [out=DIR] [tracking_uri=URI]
+    colmo-report experiment=pendulum [experiment=cheetah ...] [sweep=latest|all|NAME]
+                 [axis=samples|evaluations|seconds] [out=DIR] [tracking_uri=URI]
 
 `experiment` (repeatable, or comma-separated) names MLflow experiments (colmo names them after
 the task); `tracking_uri` defaults to the tracker's `sqlite:///mlruns.db` in the working
 directory. `out` is a new directory (default `reports/<experiments>_<date>_<time>`); one that
 already holds a report is refused, so a report never overwrites another (or a tracked file).
 
-Which runs count. Every FINISHED search run of the experiments is read (sweep parents and
+Which runs count. One sweep is compared: `sweep=latest` (default) the latest `-m` sweep (its
+parent run, and one per experiment when it spans tasks), `sweep=NAME` the sweep whose parent
+run is named NAME (`pendulum-sweep-121503`), `sweep=all` every run of the experiments (also
+the default when they hold no sweep). Its FINISHED search runs are read (sweep parents and
 `colmo-optimize` runs are not searches); runs that did not finish are counted and named, not
 used. Runs are grouped by task and variant: the GFO method, its budget when tuning, and any
 other setting that differs between the task's runs (`database.num_islands=5`); settings that
@@ -22,10 +25,11 @@ Seeds are aggregated as mean ± sample std.
   best program, without and with GFO, samples to reach the task's `task.target_score`), one
   line per run, where each run's samples and time went (valid programs, duplicates, tokens/s,
   generator and evaluator busy), the runs left out and why, and each variant's best policy;
-- `best_so_far.png`: one panel per task, x = programs sampled, candidate evaluations or
-  seconds of search (`axis`, so GFO and no GFO compare per sample or per unit of compute);
-  solid: best over all islands, dashed: best per island; red without GFO, blue with it (other
-  GFO variants in other colours); dotted: the target.
+- `best_so_far.png`: one panel per task, x = model calls (programs sampled), candidate
+  evaluations or seconds of search (`axis`, so GFO and no GFO compare per sample or per unit
+  of compute); one colour per variant, named in the legend: its mean over seeds (thick), the
+  band from its lowest to its highest seed, each seed thin; a curve of one point is a marker;
+  dotted: the target.
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ from typing import Optional, Sequence
 from mlflow import MlflowClient
 
 from colmo.report.figure import figure
-from colmo.report.runs import AXES, group, read_runs
+from colmo.report.runs import AXES, LATEST, group, read_runs
 from colmo.report.tables import best_policies, generation_table, left_out_lines, mean_std, runs_table, table_one
 from colmo.track import connect, default_tracking_uri, sqlite_path
 
@@ -57,12 +61,15 @@ def default_out(experiments: Sequence[str], now: Optional[datetime.datetime] = N
     return Path("reports") / f"{name}_{stamp}"
 
 
-def write_report(client: MlflowClient, experiments: Sequence[str], out: Path, axis: str = "samples", command: str = "") -> Path:
-    """Write `report.md` and `best_so_far.png` into the new directory `out`; return the
-    Markdown file. `ValueError` if `out` already holds a report or no run can be used."""
+def write_report(
+    client: MlflowClient, experiments: Sequence[str], out: Path, axis: str = "samples", command: str = "", sweep: str = LATEST
+) -> Path:
+    """Write `report.md` and `best_so_far.png` of one sweep (`sweep`: latest, all or a parent
+    run's name) into the new directory `out`; return the Markdown file. `ValueError` if `out`
+    already holds a report, the sweep does not exist or no run can be used."""
     if (out / REPORT_FILE).exists():
         raise ValueError(f"{out} already holds a report: choose another out= (a report never overwrites one)")
-    reading = read_runs(client, experiments, axis)
+    reading = read_runs(client, experiments, axis, sweep)
     tasks = group(reading.curves)
     if not tasks:
         raise ValueError(f"no finished runs with metrics in experiment(s) {', '.join(experiments)}")
@@ -71,6 +78,8 @@ def write_report(client: MlflowClient, experiments: Sequence[str], out: Path, ax
     count = len(reading.curves)
     lines = [
         f"# colmo report: {', '.join(experiments)}",
+        "",
+        f"Compared: {reading.sweep}.",
         "",
         f"{count + len(reading.left_out)} search runs read from MLflow on {datetime.date.today().isoformat()} "
         f"with `{command or 'colmo-report'}`; {count} count, {len(reading.left_out)} left out (listed below: "
@@ -88,7 +97,8 @@ def write_report(client: MlflowClient, experiments: Sequence[str], out: Path, ax
         "",
         f"![best-so-far curves]({PLOT_FILE})",
         "",
-        f"x: {AXES[axis][1]}. Solid: best over all islands; dashed: best within each island. Red: no GFO; blue: GFO.",
+        f"x: {AXES[axis][1]}. One colour per variant (legend): thick, the mean over seeds; band, lowest to highest seed; "
+        "thin, each seed; a marker, a run of one batch.",
         "",
         "## Runs",
         "",
@@ -111,7 +121,7 @@ def write_report(client: MlflowClient, experiments: Sequence[str], out: Path, ax
     return path
 
 
-_KEYS = ("experiment", "axis", "out", "tracking_uri")
+_KEYS = ("experiment", "sweep", "axis", "out", "tracking_uri")
 
 
 def _setting(text: str) -> tuple[str, str]:
@@ -130,7 +140,8 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
     )
     parser.add_argument(
         "settings", nargs="+", type=_setting, metavar="key=value",
-        help="experiment=NAME[,NAME] (required, repeatable); axis=samples|evaluations|seconds (x of the figure, "
+        help="experiment=NAME[,NAME] (required, repeatable); sweep=latest|all|NAME (which sweep: the latest, every run, "
+        "or the one whose parent run is NAME; default latest); axis=samples|evaluations|seconds (x of the figure, "
         "default samples); out=DIR (a new directory; default reports/<experiments>_<date>_<time>); "
         "tracking_uri=URI (default sqlite:///mlruns.db in the working directory)",
     )
@@ -150,7 +161,7 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
         parser.error(f"no tracking database at {database}: run a search first, or pass tracking_uri=")
     out = Path(options["out"]) if "out" in options else default_out(experiments)
     try:
-        path = write_report(connect(uri), experiments, out, axis, f"{prog} {' '.join(args)}")
+        path = write_report(connect(uri), experiments, out, axis, f"{prog} {' '.join(args)}", options.get("sweep", LATEST))
     except ValueError as error:
         print(f"{prog}: error: {error}", file=sys.stderr)
         sys.exit(2)

@@ -1,35 +1,58 @@
-"""The report's figure, the paper's Fig. 4: best score so far against samples, candidate
-evaluations or seconds, one panel per task, every run of every variant."""
+"""The report's figure, the paper's Fig. 4: best score so far against model calls, candidate
+evaluations or seconds, one panel per task; per variant (one colour each, in the legend) the
+mean over seeds with a band from the lowest to the highest seed, and each seed's curve thin.
+A curve of one point (a search that ended after its first batch) is drawn as a marker."""
 
 from __future__ import annotations
 
+import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from colmo.report.runs import AXES, Variant
 from colmo.report.tables import dims
-from colmo.track import draw_best_so_far
 
-_GFO_COLORS = ("tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:cyan")
+_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:cyan", "tab:olive", "tab:pink", "0.3")
+
+
+def _draw_variant(ax: Axes, variant: Variant, color: str) -> None:
+    """The variant's mean best-so-far over seeds (a step curve on the union of their x), the
+    band between its lowest and highest seed, and each seed thin; a single point as a marker."""
+    label = f"{variant.name} ({len(variant.runs)} seed{'s' if len(variant.runs) != 1 else ''})"
+    for run in variant.runs:
+        ax.plot(run.x, run.best, color=color, linewidth=0.8, alpha=0.5, drawstyle="steps-post", marker="o" if len(run.x) == 1 else None)
+    grid = np.unique(np.concatenate([np.asarray(run.x, dtype=float) for run in variant.runs]))
+    # Best so far is a step function: each seed's value at x is its last one at or before x
+    # (undefined before its first batch, and held after its last).
+    values = np.full((len(variant.runs), len(grid)), np.nan)
+    for row, run in enumerate(variant.runs):
+        index = np.searchsorted(np.asarray(run.x, dtype=float), grid, side="right") - 1
+        values[row, index >= 0] = np.asarray(run.best)[index[index >= 0]]
+    defined = ~np.isnan(values).all(axis=0)
+    grid, values = grid[defined], values[:, defined]
+    mean = np.nanmean(values, axis=0)
+    if len(grid) == 1:
+        ax.plot(grid, mean, color=color, linestyle="none", marker="o", markersize=8, label=label)
+    else:
+        ax.plot(grid, mean, color=color, linewidth=2.2, drawstyle="steps-post", label=label)
+    if len(variant.runs) > 1:
+        ax.fill_between(grid, np.nanmin(values, axis=0), np.nanmax(values, axis=0), color=color, alpha=0.18, step="post", linewidth=0)
 
 
 def figure(tasks: dict[str, list[Variant]], axis: str = "samples") -> Figure:
-    """Fig. 4: one panel per task, every run of every variant, against `axis`."""
+    """Fig. 4: one panel per task, one colour per variant, against `axis`."""
     fig = Figure(figsize=(6.5 * len(tasks), 4.8), layout="constrained")
     axes = fig.subplots(1, len(tasks), squeeze=False)[0]
     for ax, (task, variants) in zip(axes, tasks.items()):
-        tuned = iter(_GFO_COLORS)
-        for variant in variants:
-            color = "tab:red" if not variant.gfo else next(tuned, "0.3")
-            for index, run in enumerate(variant.runs):
-                label = f"{variant.name} ({len(variant.runs)} seeds)" if index == 0 else None
-                draw_best_so_far(ax, run.x, run.best, run.per_island, color, label)
+        for index, variant in enumerate(variants):
+            _draw_variant(ax, variant, _COLORS[index % len(_COLORS)])
         first = variants[0].runs[0]
         if first.target is not None:
             ax.axhline(first.target, color="0.4", linestyle=":", linewidth=1.2, label=f"target {first.target:g}")
         observation_size, action_size = dims(variants)
         ax.set_title(f"{task} (state {observation_size}, action {action_size})")
         ax.set_xlabel(AXES[axis][1])
-        ax.set_ylabel("best score so far (dashed: per island)")
+        ax.set_ylabel("best score so far")
         ax.grid(alpha=0.3)
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=3, frameon=False)  # below: never over the curves
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=2, frameon=False)  # below: never over the curves
     return fig

@@ -1,5 +1,6 @@
-"""Which runs a report counts, read back from MLflow: every FINISHED search run of the
-experiments (sweep parents and `colmo-optimize` runs are not searches), with its best-so-far
+"""Which runs a report counts, read back from MLflow: the FINISHED search runs of one sweep of
+the experiments (`select_sweep`: the latest, one named, or every run with `sweep=all`; sweep
+parents and `colmo-optimize` runs are not searches), with its best-so-far
 history against the chosen axis; runs that did not finish are left out with the reason. Runs
 are grouped by task and variant: the GFO method, its budget when tuning, and any other setting
 that differs between the task's runs (`database.num_islands=5`); settings that do not change
@@ -13,14 +14,17 @@ from typing import Optional, Sequence
 
 from mlflow import MlflowClient
 from mlflow.entities import Run
+from mlflow.utils.mlflow_tags import MLFLOW_PARENT_RUN_ID
 
 from colmo.optimize.methods import METHODS
 from colmo.track import SWEEP_TAG
 
+ALL_RUNS = "all"
+LATEST = "latest"
 NO_GFO = "no GFO"
 # x axes: the metric logged at each step (samples is the step itself) and its label.
 AXES = {
-    "samples": (None, "programs sampled"),
+    "samples": (None, "model calls (programs sampled)"),
     "evaluations": ("evaluations", "candidate evaluations (each over task.episodes episodes)"),
     "seconds": ("seconds", "seconds of search (wall clock)"),
 }
@@ -82,18 +86,55 @@ class Reading:
 
     curves: list[RunCurves]
     left_out: list[tuple[Run, str]]
+    sweep: str = ""  # which runs were read: the sweep's parent run name(s), or every run
 
 
-
-def _search_runs(client: MlflowClient, experiment_ids: list[str]) -> list[Run]:
-    """Every search run (not sweep parents, not colmo-optimize runs), newest first."""
+def _all_runs(client: MlflowClient, experiment_ids: list[str]) -> list[Run]:
+    """Every run of the experiments, newest first."""
     runs, token = [], None
     while True:
         page = client.search_runs(experiment_ids, "", max_results=1000, order_by=["attributes.start_time DESC"], page_token=token)
-        runs += [run for run in page if SWEEP_TAG not in run.data.tags and run.data.tags.get("colmo.command", "search") == "search"]
+        runs += list(page)
         token = page.token
         if not token:
             return runs
+
+
+def select_sweep(client: MlflowClient, experiment_ids: list[str], sweep: str = LATEST) -> tuple[Optional[set[str]], str]:
+    """The parent run ids of the sweep a report reads, and how to name it. `latest`: the latest
+    sweep parent with a child job (every run when the experiments hold none: searches started
+    without `-m`); `all`: every run (None); else a sweep parent's run name or `colmo.sweep` id.
+    A sweep over several tasks has one parent per experiment, all with the same `colmo.sweep`
+    id: all of them are the sweep. `ValueError` if no sweep has that name."""
+    if sweep == ALL_RUNS:
+        return None, "every run of the experiment(s)"
+    parents = [run for run in _all_runs(client, experiment_ids) if SWEEP_TAG in run.data.tags]
+    if sweep == LATEST:
+        def has_child(parent: Run) -> bool:
+            query = f"tags.`{MLFLOW_PARENT_RUN_ID}` = '{parent.info.run_id}'"
+            return bool(client.search_runs(experiment_ids, query, max_results=1))
+
+        chosen = next((parent for parent in parents if has_child(parent)), None)
+        if chosen is None:
+            return None, "every run of the experiment(s) (no sweep in them)"
+    else:
+        chosen = next((p for p in parents if sweep in (p.info.run_name, p.data.tags[SWEEP_TAG])), None)
+        if chosen is None:
+            names = ", ".join(p.info.run_name for p in parents[:10]) or "none"
+            raise ValueError(f"no sweep named {sweep!r} (sweeps, latest first: {names}; or sweep=all)")
+    members = [p for p in parents if p.data.tags[SWEEP_TAG] == chosen.data.tags[SWEEP_TAG]]
+    return {p.info.run_id for p in members}, "sweep " + ", ".join(sorted(p.info.run_name for p in members))
+
+
+
+def _search_runs(client: MlflowClient, experiment_ids: list[str], parents: Optional[set[str]]) -> list[Run]:
+    """Every search run (not sweep parents, not colmo-optimize runs) of the sweep with these
+    parent runs (every one if None), newest first."""
+    return [
+        run for run in _all_runs(client, experiment_ids)
+        if SWEEP_TAG not in run.data.tags and run.data.tags.get("colmo.command", "search") == "search"
+        and (parents is None or run.data.tags.get(MLFLOW_PARENT_RUN_ID) in parents)
+    ]
 
 
 def _history(client: MlflowClient, run_id: str, key: str) -> dict[int, float]:
@@ -105,9 +146,9 @@ def _setting_key(params: dict[str, str]) -> dict[str, str]:
     return {key: value for key, value in params.items() if not key.startswith(_IGNORED)}
 
 
-def read_runs(client: MlflowClient, experiments: Sequence[str], axis: str = "samples") -> Reading:
-    """The finished search runs of `experiments` with their best-so-far histories against
-    `axis`; the latest of each repeat (same settings and seed) counts, the others are left out
+def read_runs(client: MlflowClient, experiments: Sequence[str], axis: str = "samples", sweep: str = LATEST) -> Reading:
+    """The finished search runs of one sweep of `experiments` (`select_sweep`) with their
+    best-so-far histories against `axis`; the latest of each repeat (same settings and seed) counts, the others are left out
     with the reason, and so are runs that did not finish or have no curve."""
     ids = []
     for name in experiments:
@@ -115,11 +156,12 @@ def read_runs(client: MlflowClient, experiments: Sequence[str], axis: str = "sam
         if experiment is None:
             raise ValueError(f"no MLflow experiment named {name!r} at {client.tracking_uri}")
         ids.append(experiment.experiment_id)
+    parents, selected = select_sweep(client, ids, sweep)
     metric, _ = AXES[axis]
     curves: list[RunCurves] = []
     left_out: list[tuple[Run, str]] = []
     counted: dict[tuple, str] = {}  # settings -> run name of the latest run with them
-    for run in _search_runs(client, ids):
+    for run in _search_runs(client, ids, parents):
         params, run_id = run.data.params, run.info.run_id
         if run.info.status != "FINISHED":
             left_out.append((run, f"status {run.info.status}"))
@@ -151,7 +193,7 @@ def read_runs(client: MlflowClient, experiments: Sequence[str], axis: str = "sam
             curve.per_island.append([history.get(step, float("nan")) for step in curve.steps])
         curves.append(curve)
     _name_variants(curves)
-    return Reading(curves, left_out)
+    return Reading(curves, left_out, selected)
 
 
 def _name_variants(curves: list[RunCurves]) -> None:
