@@ -24,7 +24,7 @@ What a search's run holds:
       mlflow.set_tracking_uri(uri); mlflow.set_experiment("pendulum")
       mlflow.load_table("programs.json", run_ids=[...], extra_columns=["run_id"])
   (`MlflowClient(uri).load_table` also searches the *global* tracking URI: set it.)
-- at the end: best_policy.py, summary.json, the Hydra config files under `hydra/`, the
+- at the end: best_policy.py, simplified_policy.py (when simplification made it), summary.json, the Hydra config files under `hydra/`, the
   best-so-far plot `best_so_far.png`, and the best policy's plot and video on a held-out episode
   under `best_policy/` (when `evaluation.render` made them); status FINISHED, KILLED (interrupted) or FAILED (the
   generator failed, or the process exited without finishing the search).
@@ -57,7 +57,7 @@ from mlflow.utils.mlflow_tags import MLFLOW_LOGGED_ARTIFACTS, MLFLOW_PARENT_RUN_
 
 from colmo.config import OptimizeConfig, SearchConfig
 from colmo.record import BatchReport, SampleRecord, Summary
-from colmo.store import BEST_POLICY_FILE, SUMMARY_FILE
+from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
 from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE, program_row, programs_page
 from colmo.track.store import (
     FAILED,
@@ -227,7 +227,7 @@ class MlflowTracker:
         if self.rows:
             self._write_table()
         run_dir = Path(summary.run_dir)
-        for name in (BEST_POLICY_FILE, SUMMARY_FILE):
+        for name in (BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE):  # each one the search made
             if (run_dir / name).is_file():
                 self.client.log_artifact(self.run_id, str(run_dir / name))
         for kind in ("plot", "video"):  # the best policy on a held-out episode
