@@ -466,12 +466,10 @@ class Search:
             self.deadline = max(self.end - plan.seconds - in_flight, time.perf_counter() + 0.25 * max(left, 0.0))
             if self.deadline - time.perf_counter() >= self.estimated_seconds:
                 limit = "max_samples"
+        early = f" (search stops {duration(self.end - self.deadline)} early to finish)" if limit.startswith("max_seconds") else ""
         log.info(
-            "estimated duration: search %s (%d samples x %.1f s per program, %d at a time; generation not included), "
-            "finish %s (%s); the limit that binds: %s%s",
-            duration(self.estimated_seconds), cfg.search.max_samples, self.program_seconds, in_parallel, duration(plan.seconds),
-            plan.describe(cfg), limit,
-            f" (the search stops {duration(self.end - self.deadline)} before it to finish)" if cfg.search.max_seconds else "",
+            "estimated duration: search %s (%d samples x %.1f s, %d at a time, generation not included), finish %s; limit that binds: %s%s",
+            duration(self.estimated_seconds), cfg.search.max_samples, self.program_seconds, in_parallel, duration(plan.seconds), limit, early,
         )
 
     def _finish_by(self) -> float:
