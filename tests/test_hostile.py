@@ -219,7 +219,7 @@ HOSTILE = {
     "generator frame": (policy_doing("(x for x in obs).gi_frame.f_back.f_globals"), "forbidden: .f_globals"),
     "traceback frame": (policy_doing("try:\n        1 / 0\n    except Exception as e:\n        e.__traceback__.tb_frame"), "forbidden: .tb_frame"),
     "bound method owner": (policy_doing("print.__self__"), "forbidden: .__self__"),
-    "array ctypes": (policy_doing("obs.ctypes.data"), "forbidden: .ctypes"),
+    "array ctypes": (policy_doing("obs.ctypes.shape"), "forbidden: .ctypes"),
     # Raw memory: object arrays over buffers, in every form, and freeing a buffer under a view.
     "object array over a buffer": (policy_doing("a = np.ndarray(shape=(4,), dtype='O', buffer=bytearray(32))"), "forbidden: .ndarray"),
     "structured object dtype": (policy_doing("a = np.frombuffer(bytes(8), dtype=[('a', 'O')])"), "forbidden: object dtype 'O'"),
