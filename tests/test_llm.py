@@ -57,13 +57,14 @@ def model() -> Path:
 def samples(run_dir: Path) -> list[dict]:
     with sqlite3.connect(run_dir / "programs.db") as db:
         db.row_factory = sqlite3.Row
-        return [dict(row) for row in db.execute("SELECT sample, status, raw, code, generator FROM samples ORDER BY sample")]
+        return [dict(row) for row in db.execute("SELECT sample, status, raw, code, generator, model_calls FROM samples ORDER BY sample")]
 
 
 def check_written_by_the_model(rows: list[dict], generator: str, min_samples: int, min_evaluated: int) -> None:
     starter = [row for row in rows if row["sample"] < 0]
     written = [row for row in rows if row["sample"] >= 0]
-    assert len(starter) == 1 and len(written) >= min_samples
+    # search.max_samples counts model calls: a duplicate generated again is one sample of several calls.
+    assert len(starter) == 1 and written and sum(row["model_calls"] for row in written) >= min_samples
     assert {row["generator"] for row in written} == {generator}
     # The prompts show only the starter and the programs of this run: no raw answer is one of them.
     shown = {starter[0]["raw"].strip()} | {row["code"].strip() for row in rows if row["code"]}
