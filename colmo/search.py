@@ -37,7 +37,7 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Optional
+from typing import Optional, Union
 
 import numpy as np
 
@@ -85,6 +85,19 @@ _POLL_S = 0.2  # how often waits check the deadline and interruptions
 # The finish ends this long before the limit: writing the summary, closing the workers and leaving
 # the process took up to 6.5 s on 2 loaded cores, which this and the 5 s a run may take past its limit cover.
 _CLOSE_S = 1.5
+
+
+# An answer's program, keyed as the run tells programs apart, or why no program could be read from it.
+Reading = Union[ParametricProgram, Unusable, ForbiddenProgram]
+
+
+@dataclass(frozen=True)
+class _Answer:
+    """A model's answer with the prompt it answered and its program as read, once."""
+
+    prompt: Prompt
+    generation: Generation
+    reading: Reading
 
 
 @dataclass
@@ -243,7 +256,7 @@ class Search:
         return self.cfg.search.max_samples - self.counters.samples - self.in_flight_samples
 
     def _prompt(self) -> Prompt:
-        return build_prompt(self.spec.description, self.database.select(), constants_tuned=self.cfg.gfo.method != "none")
+        return build_prompt(self.spec.description, self.database.select(), constants_tuned=self.cfg.gfo.tunes_constants)
 
     def _generate(self) -> Optional[_Batch]:
         """Generate the next batch and start evaluating it; None if the search is stopping."""
@@ -253,21 +266,22 @@ class Search:
         generations = self._generated(prompt, n)
         if generations is None:
             return None
-        answers = self._regenerate_duplicates([(prompt, generation) for generation in generations], self._samples_left() - n)
+        answers = [_Answer(prompt, generation, self._read(generation)) for generation in generations]
+        answers = self._regenerate_duplicates(answers, self._samples_left() - n)
         seconds = time.perf_counter() - started
         self.generation_seconds += seconds
         batch = _Batch(self.next_batch, seconds, time.perf_counter())
         samples = [
-            Sample(self.next_sample + i, batch.index, prompt.island, tuple(prompt.parent_keys), generation)
-            for i, (prompt, generation) in enumerate(answers)
+            Sample(self.next_sample + i, batch.index, answer.prompt.island, tuple(answer.prompt.parent_keys), answer.generation)
+            for i, answer in enumerate(answers)
         ]
         # Stored before any is evaluated (a full disk stops the search here, with no gap in the
         # store's sample numbers); a run that stops before their outcomes land evaluates them on resume.
         self.store.add(*(SampleRecord.of(sample, PENDING) for sample in samples))
         self.next_batch += 1
         self.next_sample += len(samples)
-        for sample in samples:
-            batch.outcomes.append(self._submit(sample))
+        for sample, answer in zip(samples, answers):
+            batch.outcomes.append(self._submit(sample, answer.reading))
         self.in_flight_samples += sum(sample.generation.calls for sample in samples)
         return batch
 
@@ -287,7 +301,7 @@ class Search:
             log.error("%s", self.stop_reason)
             return None
 
-    def _regenerate_duplicates(self, answers: list[tuple[Prompt, Generation]], calls_left: int) -> list[tuple[Prompt, Generation]]:
+    def _regenerate_duplicates(self, answers: list[_Answer], calls_left: int) -> list[_Answer]:
         """`answers` with each duplicate generated again, from a new selection of the database (a
         fresh seed comes with every request), up to `search.duplicate_retries` times and within
         `calls_left` model calls: a model's copy of a shown program would waste its turn. A
@@ -302,30 +316,33 @@ class Search:
                 break
             calls_left -= len(fresh)
             for i, generation in zip(repeated, fresh):
-                answers[i] = (prompt, generation.after(answers[i][1]))
+                answers[i] = _Answer(prompt, generation.after(answers[i].generation), self._read(generation))
         return answers
 
-    def _duplicates(self, answers: list[tuple[Prompt, Generation]]) -> list[int]:
+    def _duplicates(self, answers: list[_Answer]) -> list[int]:
         """The positions in `answers` whose program is known, or the same as an earlier answer's."""
         keys: set[str] = set()
         repeated = []
-        for i, (_, generation) in enumerate(answers):
-            try:
-                key = self._read(generation).key
-            except (Unusable, ForbiddenProgram):
+        for i, answer in enumerate(answers):
+            if not isinstance(answer.reading, ParametricProgram):
                 continue
+            key = answer.reading.key
             if self.database.is_known(key) or key in keys:
                 repeated.append(i)
             keys.add(key)
         return repeated
 
-    def _read(self, generation: Generation) -> ParametricProgram:
-        """The program of an answer, keyed as this run tells programs apart; `Unusable` or `ForbiddenProgram`."""
-        return self._identified(read_program(generation.text, self.spec.allowed_imports, generation.prefix, self.cfg.database.max_nodes))
+    def _read(self, generation: Generation) -> Reading:
+        """The program of an answer, keyed as this run tells programs apart, or why none could be
+        read (read once per answer: extraction and the static check are the coordinator's work)."""
+        try:
+            return self._identified(read_program(generation.text, self.spec.allowed_imports, generation.prefix, self.cfg.database.max_nodes))
+        except (Unusable, ForbiddenProgram) as error:
+            return error
 
     def _identified(self, program: ParametricProgram) -> ParametricProgram:
         """With GFO, programs that differ only in constants are one; with gfo=none, each set of constants is a program."""
-        return identity(program, by_structure=self.cfg.gfo.method != "none")
+        return identity(program, by_structure=self.cfg.gfo.tunes_constants)
 
     def _reevaluate(self, records: list[SampleRecord]) -> _Batch:
         """The pending and interrupted samples of a resumed run, as a batch of their own."""
@@ -335,18 +352,17 @@ class Search:
                 record.raw, record.generator, record.prompt_tokens, record.completion_tokens, record.generation_seconds, record.prompt_prefix,
                 record.model_calls,
             )
-            batch.outcomes.append(self._submit(Sample(record.sample, record.batch, record.island, record.parent_keys, generation)))
+            sample = Sample(record.sample, record.batch, record.island, record.parent_keys, generation)
+            batch.outcomes.append(self._submit(sample, self._read(generation)))
         self.in_flight_samples += sum(record.model_calls for record in records)
         return batch
 
-    def _submit(self, sample: Sample) -> concurrent.futures.Future:
-        """Read the sample's program and start its evaluation; a future of its record."""
-        try:
-            program = self._read(sample.generation)
-        except Unusable as error:
-            return self._settled(SampleRecord.of(sample, UNUSABLE, failure=f"unusable output: {error}"))
-        except ForbiddenProgram as error:
-            return self._settled(SampleRecord.of(sample, FAILED, failure=str(error)))
+    def _submit(self, sample: Sample, program: Reading) -> concurrent.futures.Future:
+        """Start the evaluation of the sample's program (as `_read` read it); a future of its record."""
+        if isinstance(program, Unusable):
+            return self._settled(SampleRecord.of(sample, UNUSABLE, failure=f"unusable output: {program}"))
+        if isinstance(program, ForbiddenProgram):
+            return self._settled(SampleRecord.of(sample, FAILED, failure=str(program)))
         if self.database.is_known(program.key):
             return self._settled(SampleRecord.of(sample, DUPLICATE, program))
         # Known from now on, so a batch generated before this one is integrated skips it too.
@@ -457,7 +473,7 @@ class Search:
         if cfg.search.max_seconds:
             # Past the deadline each program in flight ends its candidate, then scores its rounded
             # constants on the fast path and by the referee: three evaluations each, on shared workers.
-            evaluation = self.program_seconds / (1 if cfg.gfo.method == "none" else cfg.gfo.budget + 2)
+            evaluation = self.program_seconds / (cfg.gfo.budget + 2 if cfg.gfo.tunes_constants else 1)
             in_flight = SAFETY * 3 * evaluation * max(1.0, cfg.llm.batch_size * cfg.search.queue_size / workers)
             left = self.end - time.perf_counter()
             limit = f"max_seconds={cfg.search.max_seconds:g}"
