@@ -117,6 +117,12 @@ class GFOConfig:
         _above(self, "gfo", relative_step=0, min_step=0)
 
     @property
+    def tunes_constants(self) -> bool:
+        """Whether the method changes a program's constants: every method but `none`, which
+        evaluates the program as written."""
+        return self.method != "none"
+
+    @property
     def racing_on(self) -> bool:
         if self.racing is not None:
             return self.racing

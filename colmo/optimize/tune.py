@@ -106,7 +106,7 @@ def tune(evaluate: CandidateEvaluator, x0: Sequence[float], cfg: "GFOConfig", se
     initial = evaluate.fast([x0])[0]
     best_params, best = x0, initial
     evaluations, steps, raced_out, cut_short = 1, initial.steps, 0, False
-    if cfg.method != "none" and len(x0) and not initial.failure:
+    if cfg.tunes_constants and len(x0) and not initial.failure:
         method = METHODS[cfg.method].make(len(x0), cfg, seed)
         method.tell(method.ask()[0], initial.score)  # the first ask is z = 0, i.e. x0
         scale = step_sizes(x0, cfg)
@@ -166,7 +166,7 @@ def optimize_program(
 ) -> ProgramResult:
     """Tune `program`, and have the referee score the readable (4-digit) code that results."""
     start = time.perf_counter()
-    if cfg.method == "none" or not program.values:  # nothing to tune: the referee's score is the only one
+    if not cfg.tunes_constants or not program.values:  # nothing to tune: the referee's score is the only one
         final = evaluate.referee(program.values)
         code = instantiate(program.skeleton, program.values)
         return ProgramResult(tuple(program.values), code, final, final, 1, final.steps, 0, False, time.perf_counter() - start, measure(code))

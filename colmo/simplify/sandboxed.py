@@ -122,7 +122,7 @@ def simplify_program(
     Raises RunError if the program fails on the training episodes (nothing to keep)."""
     train = RefereeScores(executor, train_evaluator)
     heldout = RefereeScores(executor, heldout_evaluator)
-    retune = None if gfo_cfg.method == "none" else gfo_retune(executor, train_evaluator, gfo_cfg, seed, stop)
+    retune = gfo_retune(executor, train_evaluator, gfo_cfg, seed, stop) if gfo_cfg.tunes_constants else None
     batch_size = batch_size or BATCH_PER_WORKER * executor.n_workers
     try:
         return simplify(code, Scoring(train, heldout), retune, tolerance, max_rounds, batch_size, stop=stop)
