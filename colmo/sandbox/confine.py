@@ -108,6 +108,12 @@ def _prctl(option: int, argument: int) -> None:
         raise OSError(number, os.strerror(number))
 
 
+def make_undumpable() -> None:
+    """prctl(PR_SET_DUMPABLE, 0): no process of the same uid may open this one's /proc/<pid>/
+    mem, environ or fd entries, nor ptrace it (the worker at start-up, every child in `confine`)."""
+    _prctl(_PR_SET_DUMPABLE, 0)
+
+
 def _drop_user(uid: int, gid: int) -> None:
     os.setgroups([])
     os.setresgid(gid, gid, gid)
@@ -139,7 +145,7 @@ def confine(
         layers.append(layer)
         return True
 
-    attempt(LAYER_NO_DUMP, _prctl, _PR_SET_DUMPABLE, 0)
+    attempt(LAYER_NO_DUMP, make_undumpable)
     attempt(LAYER_NO_NEW_PRIVS, _prctl, _PR_SET_NO_NEW_PRIVS, 1)
 
     if 0 in os.getresuid():
@@ -147,7 +153,7 @@ def confine(
             # The kernel resets the dumpable flag when credentials change.
             if LAYER_NO_DUMP in layers:
                 layers.remove(LAYER_NO_DUMP)
-            attempt(LAYER_NO_DUMP, _prctl, _PR_SET_DUMPABLE, 0)
+            attempt(LAYER_NO_DUMP, make_undumpable)
     else:
         warnings.append(f"{LAYER_USER}: skipped: not root (uid {os.getuid()}), ids kept")
 

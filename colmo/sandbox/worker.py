@@ -37,13 +37,12 @@ from typing import Any, Callable
 
 from colmo.errors import describe_exception
 from colmo.evaluation import FAST, REFEREE, EvalRequest, Evaluation
-from colmo.sandbox.confine import enter_sandbox
+from colmo.sandbox.confine import enter_sandbox, make_undumpable
 from colmo.sandbox.namespace import compile_or_explain, template
 from colmo.sandbox.referee import LOCKSTEP, RefereeTimeout, referee_evaluation, serve_policy, write_all
 from colmo.task import Environment, evaluate_program
 
 _PR_SET_PDEATHSIG = 1
-_PR_SET_DUMPABLE = 4
 _CLONE_NEWUSER, _CLONE_NEWNET = 0x10000000, 0x40000000
 _MAX_REPLY_BYTES = 1 << 20
 _EXIT_GRACE_S = 1.0
@@ -205,7 +204,7 @@ def _isolate(parent_pid: int) -> None:
     network namespace."""
     libc = ctypes.CDLL(None, use_errno=True)
     libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    libc.prctl(_PR_SET_DUMPABLE, 0, 0, 0, 0)
+    make_undumpable()
     if os.getppid() != parent_pid:  # the coordinator died before prctl took effect
         os._exit(1)
     # Best effort: needs root, or unprivileged user namespaces for the second form.
