@@ -45,20 +45,22 @@ class RobustnessReport:
     points: tuple[Point, ...]  # every factor at every magnitude, then `all`, then the delays
     delays: tuple[int, ...]
 
+    @property
+    def nominal_score(self) -> Optional[float]:
+        return Point("nominal", 0.0, self.nominal).score
+
     def score(self, factor: str, magnitude: float) -> Optional[float]:
         return next(p.score for p in self.points if p.factor == factor and p.magnitude == magnitude)
 
     def entries(self) -> list[dict]:
         """One entry per magnitude, nominal (0) first: the score of each factor and of all
         together; then one entry per delay (`delay_steps`)."""
-        nominal = None if self.nominal.failure else self.nominal.score
-        rows = [{"magnitude": 0.0, **{name: nominal for name in (*FACTORS, ALL)}}]
+        rows = [{"magnitude": 0.0, **{name: self.nominal_score for name in (*FACTORS, ALL)}}]
         rows += [{"magnitude": m, **{name: self.score(name, m) for name in (*FACTORS, ALL)}} for m in self.magnitudes]
         return rows
 
     def delay_entries(self) -> list[dict]:
-        nominal = None if self.nominal.failure else self.nominal.score
-        return [{"delay_steps": 0, "score": nominal}] + [{"delay_steps": k, "score": self.score("delay", k)} for k in self.delays]
+        return [{"delay_steps": 0, "score": self.nominal_score}] + [{"delay_steps": k, "score": self.score("delay", k)} for k in self.delays]
 
     def failures(self) -> list[str]:
         return [f"{p.factor} {p.magnitude:g}: {p.evaluation.failure}" for p in self.points if p.evaluation.failure]
