@@ -83,12 +83,14 @@ def read_policy_file(path: str, allowed_imports: Sequence[str]) -> ParametricPro
         raise ConfigError(f"cannot read policy_file {path}: {error.strerror}") from None
     syntax = _syntax_error(text)
     lines = text.splitlines()
+    starts_indented = text.lstrip("\n")[:1].isspace()  # as a raw completion body does
+    typo = ConfigError(f"no usable policy in {path}: syntax error at line {syntax[0]}: {syntax[1]}") if syntax else None
     # A typo inside a block of a `.py` file is the user's to fix: extraction would cut the
     # definition before it (the rule for a truncated answer) and run a broken policy. Prose,
     # the other thing that fails to parse in a saved answer, is not indented; a raw completion
     # body is indented from its first line.
-    if syntax and lines[syntax[0] - 1 : syntax[0]] and lines[syntax[0] - 1][:1].isspace() and not text.lstrip("\n")[:1].isspace():
-        raise ConfigError(f"no usable policy in {path}: syntax error at line {syntax[0]}: {syntax[1]}")
+    if syntax and lines[syntax[0] - 1 : syntax[0]] and lines[syntax[0] - 1][:1].isspace() and not starts_indented:
+        raise typo
     try:
         return read_program(text, allowed_imports)
     except ForbiddenProgram as error:
@@ -97,13 +99,13 @@ def read_policy_file(path: str, allowed_imports: Sequence[str]) -> ParametricPro
         unusable = error
     if str(unusable).startswith("no function named"):
         # A raw completion body: the docstring and body a model wrote after the `def` line.
-        body = text if text.lstrip("\n")[:1].isspace() else textwrap.indent(text, "    ")
+        body = text if starts_indented else textwrap.indent(text, "    ")
         try:
             return read_program(body, allowed_imports, prefix=COMPLETION_SIGNATURE)
         except (Unusable, ForbiddenProgram):
             pass
-    if syntax and "no complete top-level definition" in str(unusable):  # a typo in the signature
-        raise ConfigError(f"no usable policy in {path}: syntax error at line {syntax[0]}: {syntax[1]}")
+    if typo and "no complete top-level definition" in str(unusable):  # a typo in the signature
+        raise typo
     raise ConfigError(f"no usable policy in {path}: {unusable}")
 
 
