@@ -23,8 +23,8 @@ import numpy as np
 
 from colmo.program import parametrize
 from colmo.sandbox.namespace import load_policy
-from colmo.spec import load_spec
-from colmo.task import as_action
+from colmo.specs import load_spec
+from colmo.rollout import as_action
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

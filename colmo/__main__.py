@@ -10,7 +10,7 @@ from hydra.core.hydra_config import HydraConfig
 
 from colmo.cli import hydra_app
 from colmo.config import SearchConfig
-from colmo.spec import load_task_spec
+from colmo.specs import load_task_spec
 from colmo.store import open_for_resume, run_settings
 
 

@@ -102,7 +102,7 @@ class GFOConfig:
     min_step: float = option(0.1, "floor of the initial step, for constants near 0")
     racing: Optional[bool] = option(
         None, "stop a candidate's episodes once a paired test on the same seeds says it very likely cannot beat the best "
-        "(colmo.evaluation.Race); null: on for the comparison-based methods (oneplusone, cma, de)",
+        "(colmo.racing.Race); null: on for the comparison-based methods (oneplusone, cma, de)",
     )
     racing_min_episodes: int = option(2, "episodes a candidate always runs before racing may stop it (at least 2: the test needs a spread)")
     racing_margin: float = option(0.002, "racing also stops a candidate unlikely to beat the best by more than this fraction of its return")

@@ -3,7 +3,7 @@
 A search selects programs by their score on the training episodes, so that score flatters the
 winner. A held-out score is the referee's mean return over `episodes` other episodes, whose
 seeds come from their own stream of the run seed and never coincide with a training seed
-(`colmo.task.heldout_seeds`): the paper reports 1000 such episodes for the pendulum and the
+(`colmo.rollout.heldout_seeds`): the paper reports 1000 such episodes for the pendulum and the
 ball-in-cup. The search scores its best programs this way at the end, `colmo-optimize` its
 tuned policy, and
 
@@ -36,8 +36,8 @@ from colmo.optimize.tune import CandidateEvaluator, calibrated
 from colmo.program import ParametricProgram, parametrize
 from colmo.record import finite_or_none
 from colmo.robustness import RobustnessReport, robustness_report, save, table
-from colmo.spec import Spec, load_task_spec
-from colmo.task import episode_seeds, heldout_seeds
+from colmo.specs import Spec, load_task_spec
+from colmo.rollout import episode_seeds, heldout_seeds
 
 
 def heldout_evaluator(evaluator: Evaluator, seed: int, episodes: int) -> Evaluator:

@@ -20,7 +20,7 @@ counters count model calls, the regenerations included, so that samples mean mod
 Stopping: `search.max_samples`, `search.stop_at_score`, and `search.max_seconds`, a wall-clock
 limit of the whole run from the start of the process: the search stops early enough to leave
 the programs in flight their final scores and the finish its held-out scores, simplification
-and video (`colmo.best.plan_finish`, from the starter's calibration), and says before the first
+and video (`colmo.finish.plan_finish`, from the starter's calibration), and says before the first
 batch how long the run will take and which limit binds. At the search's deadline a generation in flight is abandoned and programs in flight stop tuning
 at their next candidate, their best so far scored and stored (`cut_short`). Ctrl-C and SIGTERM
 do the same; a second one cancels the evaluations in flight, whose samples are stored as
@@ -41,7 +41,7 @@ from typing import Optional, Union
 
 import numpy as np
 
-from colmo.best import FINISH_SHARE, SAFETY, BestPrograms, finish, plan_finish
+from colmo.finish import FINISH_SHARE, SAFETY, BestPrograms, finish, plan_finish
 from colmo.config import SearchConfig
 from colmo.database import ProgramDatabase, StoredProgram, identity
 from colmo.environments.perturb import with_perturbation
@@ -74,9 +74,9 @@ from colmo.record import (
 )
 from colmo.sandbox.check import ForbiddenProgram
 from colmo.signals import stop_signals
-from colmo.spec import Spec, load_task_spec
+from colmo.specs import Spec, load_task_spec
 from colmo.store import StoreError, open_run, run_settings, write_outputs
-from colmo.task import episode_seeds
+from colmo.rollout import episode_seeds
 
 log = logging.getLogger("colmo.search")
 

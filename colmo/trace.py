@@ -23,7 +23,7 @@ from typing import Optional
 import mujoco
 import numpy as np
 
-from colmo.task import Environment, MujocoEnvironment
+from colmo.environments.base import Environment, MujocoEnvironment
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_PHYSICS  # qpos, qvel, act (and actuator history, if any)
 

@@ -38,7 +38,7 @@ from colmo.generate import make_generator  # noqa: E402
 from colmo.program import ProgramError, instantiate, parametrize  # noqa: E402
 from colmo.prompt import Prompt, build_prompt  # noqa: E402
 from colmo.sandbox import ForbiddenProgram, check_program  # noqa: E402
-from colmo.spec import Spec, load_spec  # noqa: E402
+from colmo.specs import Spec, load_spec  # noqa: E402
 
 EXAMPLES = REPO / "examples"
 DEFAULT_PROGRAMS = {"pendulum.py": [["pendulum_mistuned.py"], ["paper_pendulum.py"], ["pendulum_mistuned.py", "paper_pendulum.py"]]}

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from colmo.sandbox.check import ForbiddenProgram, check_program
-from colmo.spec import load_task_spec
+from colmo.specs import load_task_spec
 
 ALLOWED = ["numpy", "math"]
 ROOT = Path(__file__).parent.parent

@@ -12,7 +12,7 @@ from colmo.evaluation import EvalRequest
 from colmo.executor import LocalExecutor
 from colmo.program import parametrize
 from colmo.search import Search
-from colmo.spec import load_spec
+from colmo.specs import load_spec
 from colmo.store import ProgramStore
 
 

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from conftest import compose, last_json_line, run_colmo
 
-from colmo.evaluation import FAST, REFEREE, Race
+from colmo.evaluation import FAST, REFEREE
+from colmo.racing import Race
 from colmo.optimize.tune import CandidateEvaluator
 from colmo.program import parametrize
 

@@ -27,7 +27,7 @@ from colmo.generate.mutate import MutateGenerator
 from colmo.generate.probe import ProgramProbe
 from colmo.program import parametrize
 from colmo.prompt import COMPLETION_STOP, Prompt
-from colmo.spec import load_spec
+from colmo.specs import load_spec
 
 STARTER = load_spec("pendulum.py").starter_code
 PAPER_PENDULUM = (EXAMPLES / "paper_pendulum.py").read_text()

@@ -32,9 +32,9 @@ from colmo.generate import Generation, Generator
 from colmo.generate.mutate import MutateGenerator
 from colmo.intake import MAX_ANSWER_CHARS, Unusable, read_program
 from colmo.search import Search
-from colmo.spec import load_spec
+from colmo.specs import load_spec
 from colmo.store import STORE_FILE, ProgramStore
-from colmo.task import episode_seeds
+from colmo.rollout import episode_seeds
 
 TIMEOUT_S = 3
 MEMORY_MB = 512
@@ -280,7 +280,7 @@ def test_a_forged_score_is_caught_by_the_referee(sandbox, baseline, escaped_spec
     """An escaped program replaces the evaluator in its own process: the fast path reports what
     it likes, the referee measures what its actions earn."""
     forge = (  # with the real builtins' setattr, as an object-array escape would find them
-        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.task'], 'rollout', lambda env, policy, seed, steps=None: (1000.0, 1000))\n"
+        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.rollout'], 'rollout', lambda env, policy, seed, steps=None: (1000.0, 1000))\n"
         + NOTHING
     )
     imports = ("numpy", "math", "os", "sys", "ctypes", "socket")
@@ -474,7 +474,7 @@ def test_a_tampering_programs_fast_score_is_not_its_initial_score(sandbox, basel
     from colmo.program import parametrize
 
     forge = (
-        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.task'], 'rollout', lambda env, policy, seed, steps=None: (float('400002.6'), int('1000')))\n"
+        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.rollout'], 'rollout', lambda env, policy, seed, steps=None: (float('400002.6'), int('1000')))\n"
         + NOTHING
     )
     program = parametrize(forge)  # not read_program: intake drops module-level statements, an escape would not

@@ -8,7 +8,7 @@ from colmo.config import DatabaseConfig
 from colmo.database import ProgramDatabase, Selection, StoredProgram
 from colmo.program import instantiate, parametrize
 from colmo.prompt import build_prompt
-from colmo.spec import load_spec
+from colmo.specs import load_spec
 
 DESCRIPTION = "Balance the pole.\n\nObservation: [angle, velocity]."
 LOW = StoredProgram("k-low", "import numpy as np\n\ndef policy(obs):\n    return 0.0", 1.0, 2, 5)

@@ -1,4 +1,4 @@
-"""Racing in the GFO (`gfo.racing`, `colmo.evaluation.Race`): the rule on constructed returns, its
+"""Racing in the GFO (`gfo.racing`, `colmo.racing.Race`): the rule on constructed returns, its
 place in tuning (a raced-out candidate never becomes the best), and racing on and off in real
 tuning runs through sandboxed workers, `colmo-optimize` included."""
 
@@ -10,7 +10,8 @@ import statistics
 import pytest
 from conftest import EXAMPLES, compose, last_json_line, run_colmo
 
-from colmo.evaluation import Evaluation, Race
+from colmo.evaluation import Evaluation
+from colmo.racing import Race
 from colmo.optimize.tune import CandidateEvaluator, optimize_program, tune
 
 # An incumbent's returns on 10 episodes, as a task would give them: they vary by episode.

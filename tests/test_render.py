@@ -34,8 +34,8 @@ from colmo.render import PLOT_FILE, EpisodeMedia, gl, render_episode, render_pol
 from colmo.render.gl import NoGLError
 from colmo.render.plot import plot_episode
 from colmo.render.video import default_camera, render_video, video_frame_steps
-from colmo.spec import load_spec
-from colmo.task import Environment
+from colmo.specs import load_spec
+from colmo.environments.base import Environment
 from colmo.trace import STATE_SPEC, EpisodeTrace, TraceError, TraceRecorder
 
 REPO = Path(__file__).resolve().parent.parent

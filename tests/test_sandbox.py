@@ -22,7 +22,8 @@ from colmo.program import parametrize
 from colmo.sandbox import ForbiddenProgram, check_program
 from colmo.sandbox.namespace import Program, load_policy
 from colmo.sandbox.referee import RefereeTimeout, write_all
-from colmo.task import PolicyFailure, as_action, evaluate_policy
+from colmo.environments.base import PolicyFailure
+from colmo.rollout import as_action, evaluate_policy
 
 IMPORTS = ("numpy", "math")
 

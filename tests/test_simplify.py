@@ -30,8 +30,8 @@ from colmo.simplify import (
     remove_dead_code,
     simplify,
 )
-from colmo.spec import load_spec
-from colmo.task import episode_seeds, evaluate_policy
+from colmo.specs import load_spec
+from colmo.rollout import episode_seeds, evaluate_policy
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

@@ -18,8 +18,8 @@ import pytest
 from colmo.environments.ball_in_cup import BallInCup
 from colmo.environments.cheetah import Cheetah
 from colmo.environments.quadruped import Quadruped
-from colmo.spec import load_spec
-from colmo.task import evaluate_policy
+from colmo.specs import load_spec
+from colmo.rollout import evaluate_policy
 
 TASKS = ("pendulum", "ball_in_cup", "cheetah", "quadruped", "a1")
 

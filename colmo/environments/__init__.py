@@ -1,4 +1,4 @@
-"""The simulated systems colmo ships, one module each, all on `colmo.task.MujocoEnvironment`."""
+"""The simulated systems colmo ships, one module each, all on `colmo.environments.base.MujocoEnvironment`."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ import mujoco
 import mujoco_menagerie
 import numpy as np
 
-from colmo.task import MujocoEnvironment
+from colmo.environments.base import MujocoEnvironment
 
 _TIMESTEP = 0.001  # s; the paper's 1 ms control period, one physics step per action
 _JOINT_NOISE = 0.05  # rad; half-width of the uniform noise added to the home joint angles

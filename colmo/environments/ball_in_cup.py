@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from colmo.environments import dm_control_model
-from colmo.task import MujocoEnvironment
+from colmo.environments.base import MujocoEnvironment
 
 _CONTROL_TIMESTEP = 0.02  # dm_control's ball_in_cup control period, in seconds
 

@@ -6,7 +6,7 @@ import mujoco
 import numpy as np
 
 from colmo.environments import dm_control_model
-from colmo.task import MujocoEnvironment
+from colmo.environments.base import MujocoEnvironment
 
 _RUN_SPEED = 10.0  # m/s; dm_control's run speed, above which the reward is 1
 _SETTLE_STEPS = 200  # physics steps dm_control runs at reset to let the cheetah land

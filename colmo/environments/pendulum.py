@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from colmo.environments import dm_control_model
-from colmo.task import MujocoEnvironment
+from colmo.environments.base import MujocoEnvironment
 
 
 class PendulumSwingup(MujocoEnvironment):

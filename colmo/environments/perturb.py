@@ -26,7 +26,7 @@ from typing import Any, Callable
 import numpy as np
 
 from colmo.config import PerturbConfig
-from colmo.task import Environment, MujocoEnvironment
+from colmo.environments.base import Environment, MujocoEnvironment
 
 PERTURB_OPTION = "perturb"  # the reserved environment option carrying a PerturbConfig
 _STREAM = 0x9E37  # the perturbation stream of an episode seed, apart from the environment's own

@@ -8,7 +8,7 @@ import xml.etree.ElementTree as ElementTree
 import mujoco
 import numpy as np
 
-from colmo.task import MujocoEnvironment
+from colmo.environments.base import MujocoEnvironment
 
 _CONTROL_TIMESTEP = 0.02  # dm_control's quadruped control period, in seconds
 _RUN_SPEED = 5.0  # dm_control's run speed (m/s), above which its move reward is 1

@@ -43,7 +43,7 @@ import numpy as np
 
 from colmo.config import MutateConfig
 from colmo.generate.base import Generation, Generator, GeneratorError, Probe, logger, register
-from colmo.generate.mutation import CROSSOVERS, MUTATIONS, Pieces, policy_function
+from colmo.generate.operators import CROSSOVERS, MUTATIONS, Pieces, policy_function
 from colmo.program import ProgramError, instantiate, parametrize
 from colmo.prompt import Prompt
 

@@ -29,7 +29,7 @@ from colmo.executor import make_executor
 from colmo.intake import read_policy_file
 from colmo.optimize.tune import CandidateEvaluator, optimize_program
 from colmo.record import finite_or_none
-from colmo.spec import load_task_spec
+from colmo.specs import load_task_spec
 
 log = logging.getLogger("colmo.optimize")
 

@@ -6,7 +6,7 @@ search in normalized coordinates `z` (`params = x0 + step * z`, see `colmo.optim
 `z = 0` is the program's own constants, which every method asks for first.
 
 A method is *comparison-based* when only the order of the values it is told matters to it
-(the ES and DE, by selection; CMA-ES, by ranks): racing (`colmo.evaluation.Race`) is on by
+(the ES and DE, by selection; CMA-ES, by ranks): racing (`colmo.racing.Race`) is on by
 default for those. Racing stops a candidate once a paired test on the incumbent's own episode
 seeds says it very likely (90 %) does not beat the incumbent by more than `gfo.racing_margin`;
 a raced-out candidate has returns for its first episodes only, and what it is told must rank

@@ -6,7 +6,7 @@ evaluation), and each constant's step is proportional to its magnitude, so a gai
 threshold of 0.05 move on their own scales. Candidates go `gfo.workers` at a time through a
 `CandidateEvaluator`, which is where the sandboxed workers are; with racing, each candidate's
 episodes stop once it very likely cannot beat the best candidate so far
-(`colmo.evaluation.Race`), and the method is told the estimate of its mean over all of them
+(`colmo.racing.Race`), and the method is told the estimate of its mean over all of them
 (`Race.estimate`). A raced-out candidate never becomes the best, and every reported score is
 over all episodes.
 
@@ -28,7 +28,8 @@ from typing import TYPE_CHECKING, Callable, Optional, Sequence
 import numpy as np
 
 from colmo.errors import ConfigError
-from colmo.evaluation import FAST, REFEREE, Evaluation, Evaluator, Executor, Race
+from colmo.evaluation import FAST, REFEREE, Evaluation, Evaluator, Executor
+from colmo.racing import Race
 from colmo.optimize.methods import METHODS
 from colmo.program import ParametricProgram, ProgramSize, instantiate, measure
 

@@ -23,8 +23,8 @@ from colmo.evaluation import REFEREE, Evaluator, Executor
 from colmo.render.gl import NoGLError
 from colmo.render.plot import plot_episode
 from colmo.render.video import render_video
-from colmo.spec import load_spec
-from colmo.task import Environment, MujocoEnvironment
+from colmo.specs import load_spec
+from colmo.environments.base import Environment, MujocoEnvironment
 from colmo.trace import EpisodeTrace, TraceError
 
 PLOT_FILE, VIDEO_FILE = "episode.png", "episode.mp4"

@@ -24,7 +24,7 @@ from colmo.config import ExecutorConfig, TaskConfig, option
 from colmo.errors import ConfigError
 from colmo.intake import read_policy_file
 from colmo.render import PLOT_FILE, VIDEO_FILE, render_policy
-from colmo.spec import load_task_spec
+from colmo.specs import load_task_spec
 
 
 @dataclass

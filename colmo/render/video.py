@@ -19,7 +19,7 @@ import mujoco
 import numpy as np
 
 from colmo.render.gl import NoGLError, gl_unavailable_reason, select_gl_backend
-from colmo.task import MujocoEnvironment
+from colmo.environments.base import MujocoEnvironment
 from colmo.trace import STATE_SPEC, EpisodeTrace
 
 DEFAULT_FPS = 30.0

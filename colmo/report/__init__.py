@@ -45,7 +45,7 @@ from typing import Optional, Sequence
 from mlflow import MlflowClient
 
 from colmo.report.figure import figure
-from colmo.report.runs import AXES, LATEST, group, read_runs
+from colmo.report.selection import AXES, LATEST, group, read_runs
 from colmo.report.tables import best_policies, generation_table, left_out_lines, mean_std, runs_table, table_one
 from colmo.track import connect, default_tracking_uri, sqlite_path
 

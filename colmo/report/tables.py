@@ -11,7 +11,7 @@ from typing import Optional, Sequence
 from mlflow import MlflowClient
 from mlflow.entities import Run
 
-from colmo.report.runs import Variant
+from colmo.report.selection import Variant
 from colmo.store import BEST_POLICY_FILE
 
 

@@ -31,7 +31,7 @@ import numpy as np
 
 from colmo.errors import describe_exception
 from colmo.sandbox.check import NUMPY_SUBMODULES, ForbiddenProgram, attribute_allowed, check_tree, module_allowed, parse_program
-from colmo.task import PolicyFailure
+from colmo.environments.base import PolicyFailure
 
 
 def _discard(*args: object, **kwargs: object) -> None:

@@ -26,7 +26,7 @@ With `trace` set, a request runs one episode, which the worker also records as i
 (`colmo.trace.TraceRecorder`) and returns in `Evaluation.trace`: the recording is as
 trustworthy as the returns, since the child takes no part in it.
 
-The child mirrors `colmo.task.rollout`: the same `act` (policy call and action check) and
+The child mirrors `colmo.rollout.rollout`: the same `act` (policy call and action check) and
 failure reasons, each instance's `np.random` seeded as rollout seeds the global one, so a
 referee evaluation returns exactly what the fast path returns for an honest program.
 """
@@ -43,9 +43,11 @@ from typing import Callable, Sequence
 import numpy as np
 
 from colmo.errors import describe_exception, failure_reason
-from colmo.evaluation import EvalRequest, Evaluation, Race
+from colmo.evaluation import EvalRequest, Evaluation
+from colmo.racing import Race
 from colmo.sandbox.namespace import compile_or_explain
-from colmo.task import Environment, PolicyFailure, act
+from colmo.environments.base import Environment, PolicyFailure
+from colmo.rollout import act
 from colmo.trace import MAX_STEPS, TraceError, TraceRecorder
 
 _HEADER = struct.Struct("<cI")

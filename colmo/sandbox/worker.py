@@ -40,7 +40,8 @@ from colmo.evaluation import FAST, REFEREE, EvalRequest, Evaluation
 from colmo.sandbox.confine import enter_sandbox, make_undumpable
 from colmo.sandbox.namespace import compile_or_explain, template
 from colmo.sandbox.referee import LOCKSTEP, RefereeTimeout, referee_evaluation, serve_policy, write_all
-from colmo.task import Environment, evaluate_program
+from colmo.environments.base import Environment
+from colmo.rollout import evaluate_program
 
 _PR_SET_PDEATHSIG = 1
 _CLONE_NEWUSER, _CLONE_NEWNET = 0x10000000, 0x40000000
@@ -67,7 +68,7 @@ class Worker:
         envs = self.environments.setdefault(key, [])
         count = min(max(len(request.seeds), 1), LOCKSTEP) if request.mode == REFEREE else 1
         if len(envs) < count:
-            from colmo.spec import load_spec
+            from colmo.specs import load_spec
 
             spec = load_spec(request.spec)
             envs.extend(spec.make_environment(**dict(request.env)) for _ in range(count - len(envs)))

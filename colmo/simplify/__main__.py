@@ -28,7 +28,7 @@ from colmo.extract import extract_policy
 from colmo.intake import read_policy_file
 from colmo.simplify.greedy import SimplifyResult
 from colmo.simplify.sandboxed import simplify_program
-from colmo.spec import load_task_spec
+from colmo.specs import load_task_spec
 
 log = logging.getLogger("colmo.simplify")
 

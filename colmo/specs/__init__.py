@@ -1,0 +1,99 @@
+"""Specification files: one Python file per task that says what to solve and how it is scored.
+
+A spec file (see `colmo/specs/pendulum.py`) holds
+- its module docstring: the task description that heads every prompt;
+- `make_environment(**options) -> colmo.environments.base.Environment`: the simulator, with the task YAML's
+  `env:` mapping as keyword arguments;
+- `policy(obs)`: the starter program the search evolves;
+- optionally `ALLOWED_IMPORTS`: modules a policy may import besides numpy and math.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import importlib.resources
+import importlib.util
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from colmo.environments.perturb import perturbable
+from colmo.environments.base import Environment
+
+DEFAULT_IMPORTS = ("numpy", "math")
+
+
+class SpecError(ValueError):
+    """A spec file that cannot be used; the message is one line naming the problem."""
+
+
+@dataclass(frozen=True)
+class Spec:
+    name: str
+    path: Path
+    description: str
+    starter_code: str
+    make_environment: Callable[..., Environment]
+    allowed_imports: tuple[str, ...]
+
+
+def resolve_spec_path(name_or_path: str) -> Path:
+    """A spec given as a path (absolute or relative to the working directory) or as a file
+    name in colmo's bundled `specs/`."""
+    candidate = Path(name_or_path).expanduser()
+    if candidate.is_file():
+        return candidate.resolve()
+    bundled = Path(str(importlib.resources.files("colmo.specs"))) / name_or_path
+    if bundled.is_file():
+        return bundled
+    raise SpecError(f"spec file not found: {name_or_path!r} (not a file, nor one of colmo's bundled specs)")
+
+
+def _starter_code(source: str, tree: ast.Module, path: Path) -> str:
+    policy = next((n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == "policy"), None)
+    if policy is None:
+        raise SpecError(f"{path}: no starter `def policy(obs)` in the spec file")
+    imports = [ast.get_source_segment(source, n) for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))]
+    kept = [line for line in imports if line and "colmo" not in line]
+    return "\n".join(kept) + "\n\n\n" + ast.get_source_segment(source, policy, padded=True) + "\n"
+
+
+def load_spec(name_or_path: str) -> Spec:
+    """Load and check a spec file; raises `SpecError` with a one-line reason."""
+    path = resolve_spec_path(name_or_path)
+    source = path.read_text()
+    try:
+        tree = ast.parse(source, filename=str(path))
+    except SyntaxError as error:
+        raise SpecError(f"{path}:{error.lineno}: syntax error in spec file: {error.msg}") from None
+    description = ast.get_docstring(tree)
+    if not description:
+        raise SpecError(f"{path}: the spec file needs a module docstring describing the task")
+    starter = _starter_code(source, tree, path)
+
+    module_name = f"colmo_spec_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:8]}"
+    module_spec = importlib.util.spec_from_file_location(module_name, path)
+    module = importlib.util.module_from_spec(module_spec)
+    try:
+        module_spec.loader.exec_module(module)
+    except Exception as error:
+        raise SpecError(f"{path}: importing the spec file failed: {type(error).__name__}: {error}") from None
+    sys.modules[module_name] = module
+    make_environment = getattr(module, "make_environment", None)
+    if not callable(make_environment):
+        raise SpecError(f"{path}: the spec file needs a `make_environment(**options)` function")
+    allowed = tuple(dict.fromkeys(DEFAULT_IMPORTS + tuple(getattr(module, "ALLOWED_IMPORTS", ()))))
+    # Any MuJoCo spec takes `task.perturb` through the reserved option, unknown to its make_environment.
+    return Spec(path.stem, path, description, starter, perturbable(make_environment), allowed)
+
+
+def load_task_spec(name_or_path: str) -> Spec:
+    """`load_spec` for a configured task: a bad spec is the user's configuration error."""
+    from colmo.errors import ConfigError
+
+    try:
+        return load_spec(name_or_path)
+    except SpecError as error:
+        raise ConfigError(str(error)) from None

@@ -59,18 +59,7 @@ from colmo.config import OptimizeConfig, SearchConfig
 from colmo.record import BatchReport, SampleRecord, Summary
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
 from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE, program_row, programs_page
-from colmo.track.store import (
-    FAILED,
-    FINISHED,
-    KILLED,
-    default_tracking_uri,
-    log_metrics,
-    log_params,
-    open_experiment,
-    retry_locked,
-    sqlite_path,
-    ui_path,
-)
+from colmo.track.backend import FAILED, FINISHED, KILLED, default_tracking_uri, log_metrics, log_params, open_experiment, retry_locked, sqlite_path, ui_path
 from colmo.track.sweep import sweep_parent, update_parent
 
 log = logging.getLogger("colmo.track")
@@ -244,7 +233,7 @@ class MlflowTracker:
         first batch has shown that it builds (in the workers); a failure here only costs them."""
         if self.spec is None:
             return
-        from colmo.spec import load_spec
+        from colmo.specs import load_spec
 
         try:
             environment = load_spec(self.spec).make_environment(**self.env)

@@ -19,7 +19,7 @@ from pathlib import Path
 from mlflow import MlflowClient
 from mlflow.utils.mlflow_tags import MLFLOW_PARENT_RUN_ID
 
-from colmo.track.store import FAILED, FINISHED, KILLED, RUNNING, file_lock, log_metrics, retry_locked
+from colmo.track.backend import FAILED, FINISHED, KILLED, RUNNING, file_lock, log_metrics, retry_locked
 
 SWEEP_TAG = "colmo.sweep"
 SWEEP_LOCK = ".mlflow_parent.lock"
