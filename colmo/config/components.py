@@ -1,0 +1,119 @@
+"""The schemas of the config groups that pick a component by name, one schema per kind of option:
+the gradient-free optimizer (`gfo`, `gfo=bo`), the executor (`executor`, `executor=ray`) and
+the run tracker (`tracker`, `tracker=mlflow`)."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Optional
+
+from colmo.config.fields import above, at_least, option, require
+
+
+@dataclass
+class GFOConfig:
+    """The gradient-free optimizer that tunes each program's constants."""
+
+    method: str = option("oneplusone", "none, or a registered method: oneplusone, cma, de, bo")
+    budget: int = option(100, "evaluations per program, its own constants included")
+    workers: int = option(1, "candidates evaluated at a time, where the method allows it")
+    relative_step: float = option(0.3, "initial step of each constant, relative to its magnitude")
+    min_step: float = option(0.1, "floor of the initial step, for constants near 0")
+    racing: Optional[bool] = option(
+        None, "stop a candidate's episodes once a paired test on the same seeds says it very likely cannot beat the best "
+        "(colmo.racing.Race); null: on for the comparison-based methods (oneplusone, cma, de)",
+    )
+    racing_min_episodes: int = option(2, "episodes a candidate always runs before racing may stop it (at least 2: the test needs a spread)")
+    racing_margin: float = option(0.002, "racing also stops a candidate unlikely to beat the best by more than this fraction of its return")
+
+    def __post_init__(self) -> None:
+        from colmo.optimize.methods import METHODS
+
+        names = ("none", *METHODS)
+        require(self.method in names, f"gfo.method must be one of {', '.join(names)}; got {self.method!r}")
+        require(self.method != "bo" or isinstance(self, BOConfig), "gfo.method=bo needs the bo options: use gfo=bo")
+        at_least(self, "gfo", budget=1, workers=1, racing_min_episodes=2, racing_margin=0)
+        above(self, "gfo", relative_step=0, min_step=0)
+
+    @property
+    def tunes_constants(self) -> bool:
+        """Whether the method changes a program's constants: every method but `none`, which
+        evaluates the program as written."""
+        return self.method != "none"
+
+    @property
+    def racing_on(self) -> bool:
+        if self.racing is not None:
+            return self.racing
+        from colmo.optimize.methods import METHODS
+
+        return self.method in METHODS and METHODS[self.method].comparison_based
+
+
+@dataclass
+class BOConfig(GFOConfig):
+    """Optuna's Bayesian optimization."""
+
+    method: str = "bo"
+    sampler: str = option("tpe", "tpe, or gp (needs PyTorch)")
+    search_range: float = option(3.0, "each constant is searched within this many initial steps of its value")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        require(self.sampler in ("tpe", "gp"), f"gfo.sampler must be tpe or gp, got {self.sampler!r}")
+        above(self, "gfo", search_range=0)
+
+
+@dataclass
+class ExecutorConfig:
+    """Where evaluations run: sandboxed worker processes on this machine."""
+
+    name: str = option("local", "local or ray")
+    workers: int = option(0, "worker processes; 0: one per core this process may use")
+    timeout_s: Optional[float] = option(None, "wall-clock limit per evaluation; null: derived from the task (30 x the starter's time, at least 10 s)")
+    memory_mb: int = option(4096, "address-space limit of each worker and of each program's process")
+    max_retries: int = option(2, "an evaluation whose worker dies is retried this often, then recorded as failed")
+
+    def __post_init__(self) -> None:
+        require(self.name in ("local", "ray"), f"executor.name must be local or ray; got {self.name!r}")
+        require(self.name != "ray" or isinstance(self, RayExecutorConfig), "executor.name=ray needs the ray options: use executor=ray")
+        at_least(self, "executor", max_retries=0, memory_mb=256)
+        require(self.workers >= 0, f"executor.workers must be >= 0 (0 = all cores), got {self.workers}")
+        require(self.timeout_s is None or self.timeout_s > 0, f"executor.timeout_s must be > 0, got {self.timeout_s}")
+
+    @property
+    def n_workers(self) -> int:
+        # The cores this process may use (a SLURM allocation), not all the node's cores.
+        return self.workers or len(os.sched_getaffinity(0)) or 1
+
+
+@dataclass
+class RayExecutorConfig(ExecutorConfig):
+    """Evaluations on a Ray cluster: one actor per CPU, each with one sandboxed worker."""
+
+    name: str = "ray"
+    address: Optional[str] = option(None, "null: a private local Ray instance; auto: the cluster this machine joined; ray://host:10001: Ray Client")
+
+
+
+@dataclass
+class TrackerConfig:
+    """Run tracking: `none` keeps only the run directory."""
+
+    name: str = option("none", "mlflow or none")
+
+    def __post_init__(self) -> None:
+        require(self.name in ("mlflow", "none"), f"tracker.name must be mlflow or none, got {self.name!r}")
+        require(self.name != "mlflow" or isinstance(self, MlflowConfig), "tracker.name=mlflow needs the mlflow options: use tracker=mlflow")
+
+
+@dataclass
+class MlflowConfig(TrackerConfig):
+    """MLflow tracking: one run per search, a parent run per sweep."""
+
+    name: str = "mlflow"
+    tracking_uri: Optional[str] = option(None, "null: sqlite:///mlruns.db in the launch directory; or http://host:5000, postgresql://...")
+    experiment: Optional[str] = option(None, "null: the task name")
+    run_name: Optional[str] = option(None, "null: <task>-<gfo>-<llm>-s<seed>-<HHMMSS>, and -j<job number> in a sweep")
+

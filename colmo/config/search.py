@@ -1,0 +1,85 @@
+"""The schemas of the search's own config groups: the programs database, the search loop's
+limits, the held-out evaluation at its end (`evaluation`) and the simplifier (`simplify`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+from colmo.config.fields import above, at_least, option, require
+
+
+@dataclass
+class DatabaseConfig:
+    """The programs database: islands, clusters, resets (FunSearch's)."""
+
+    num_islands: int = option(10, "islands evolving independently")
+    functions_per_prompt: int = option(2, "programs shown in each prompt")
+    reset_every: int = option(400, "samples between resets of the weaker half of the islands (0: never)")
+    cluster_temperature_init: float = option(0.1, "softmax temperature over cluster scores, annealed to 0 ...")
+    cluster_temperature_period: int = option(30000, "... over this many programs per island, then restarted")
+    length_temperature: float = option(1.0, "within a cluster, shorter programs are preferred")
+    size_penalty: float = option(0.0, "clusters are drawn by score minus this many points per AST node of their smallest program")
+    max_nodes: Optional[int] = option(None, "programs bigger than this many AST nodes are refused before they are evaluated; null: no cap")
+
+    def __post_init__(self) -> None:
+        at_least(self, "database", num_islands=1, functions_per_prompt=1, cluster_temperature_period=1, size_penalty=0)
+        require(self.reset_every >= 0, f"database.reset_every must be >= 0 (0 = never), got {self.reset_every}")
+        above(self, "database", cluster_temperature_init=0, length_temperature=0)
+        require(self.max_nodes is None or self.max_nodes >= 1, f"database.max_nodes must be >= 1, got {self.max_nodes}")
+
+
+
+@dataclass
+class HeldoutConfig:
+    """Held-out evaluation: fresh episodes, their seeds disjoint from the training ones."""
+
+    episodes: int = option(100, "held-out episodes per score")
+    top: int = option(3, "the best programs of a search that get a held-out score at its end")
+    render: bool = option(True, "at the end of a search, a video and a plot of the best policy on a held-out episode")
+    simplify: bool = option(True, "at the end of a search, the best policy simplified (simplified_policy.py; options: simplify.*)")
+
+    def __post_init__(self) -> None:
+        at_least(self, "evaluation", episodes=1, top=1)
+
+
+@dataclass
+class SimplifyConfig:
+    """The simplifier (`colmo.simplify`): what a deletion may cost, and how far it goes."""
+
+    tolerance: float = option(0.01, "share of the original training score a simplified program may lose (its held-out gap may widen as much)")
+    max_rounds: int = option(200, "at most this many deletions")
+    batch_size: Optional[int] = option(None, "candidates scored per executor call, largest deletion first; null: 4 per worker")
+
+    def __post_init__(self) -> None:
+        require(0 <= self.tolerance < 1, f"simplify.tolerance must be in [0, 1), got {self.tolerance}")
+        at_least(self, "simplify", max_rounds=0)
+        require(self.batch_size is None or self.batch_size >= 1, f"simplify.batch_size must be >= 1 or null, got {self.batch_size}")
+
+
+@dataclass
+class SearchLoopConfig:
+    """The search loop's limits and display."""
+
+    max_samples: int = option(
+        1000, "stop after this many model calls (generator requests' answers), duplicates, their regenerations and failures included",
+    )
+    duplicate_retries: int = option(
+        2, "a sample whose program was already evaluated is generated again, from another selection of the database "
+        "and with a fresh seed, up to this many times (each a model call) before it is recorded as a duplicate",
+    )
+    # One hour by default: 1000 quadruped samples at one evaluation a second would take a day and
+    # more, and a user should not have to know that to get a run that ends on its own.
+    max_seconds: float = option(
+        3600.0, "wall-clock limit of the whole run from the process's start, held-out scores, simplification and video included; 0: none",
+    )
+    stop_at_score: Optional[float] = option(None, "stop once the best training score reaches this")
+    queue_size: int = option(2, "batches in flight: generation overlaps evaluation")
+    progress: bool = option(True, "live progress display on a terminal, a plain line every progress_every_s otherwise")
+    progress_every_s: float = option(30.0, "seconds between plain progress lines when stderr is not a terminal")
+
+    def __post_init__(self) -> None:
+        at_least(self, "search", max_samples=1, queue_size=1, duplicate_retries=0)
+        require(self.max_seconds >= 0, f"search.max_seconds must be >= 0 (0 = no limit), got {self.max_seconds}")
+        above(self, "search", progress_every_s=0)
+

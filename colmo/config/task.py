@@ -1,0 +1,57 @@
+"""The schema of config group `task`: the spec file, its episodes, and the model mismatch
+(`task.perturb`) every `MujocoEnvironment` draws per episode."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+from omegaconf import MISSING
+
+from colmo.config.fields import at_least, option, require
+
+
+@dataclass
+class PerturbConfig:
+    """Model mismatch drawn per episode from the episode seed, for every `MujocoEnvironment`
+    (`colmo.environments.perturb`); every factor 0 (the default) is the nominal model.
+
+    Each relative magnitude `m` scales its model fields by factors drawn uniformly from
+    [1 - m, 1 + m] (one per body, dof, geom or actuator), from a random stream of their own, so
+    the nominal episode draws are untouched and every candidate meets the same perturbations."""
+
+    mass: float = option(0.0, "relative range of each body's mass and inertia (scaled together)")
+    damping: float = option(0.0, "relative range of each joint dof's damping")
+    frictionloss: float = option(0.0, "relative range of each joint dof's dry friction (frictionloss)")
+    friction: float = option(0.0, "relative range of each geom's friction coefficients")
+    gain: float = option(0.0, "relative range of each actuator's gain (and, for servos, its feedback gains)")
+    obs_noise: float = option(0.0, "standard deviation of Gaussian noise added to every observation entry, in its units")
+    action_noise: float = option(0.0, "standard deviation of Gaussian noise added to every action, relative to its control half-range")
+    delay: int = option(0, "control delay: each action is applied this many control steps late")
+
+    def __post_init__(self) -> None:
+        at_least(self, "task.perturb", delay=0, obs_noise=0, action_noise=0)
+        for name in ("mass", "damping", "frictionloss", "friction", "gain"):
+            value = getattr(self, name)
+            require(0 <= value < 1, f"task.perturb.{name} must be in [0, 1), got {value}")
+
+    @property
+    def active(self) -> bool:
+        """Whether anything differs from the nominal model."""
+        return any(getattr(self, name) for name in self.__dataclass_fields__)
+
+
+@dataclass
+class TaskConfig:
+    """The control task: a spec file and how it is scored."""
+
+    name: str = option(MISSING, "the task's name (MLflow experiment, output directory)")
+    spec: str = option(MISSING, "spec file: a bundled name (pendulum.py) or a path")
+    episodes: int = option(10, "training episodes per score; their seeds derive from `seed`")
+    target_score: Optional[float] = option(None, "reports count the samples needed to reach this score")
+    env: dict[str, Any] = option({}, "keyword arguments for the spec's make_environment")
+    perturb: PerturbConfig = field(default_factory=PerturbConfig, metadata={"help": "per-episode model mismatch (default: none)"})
+
+    def __post_init__(self) -> None:
+        at_least(self, "task", episodes=1)
+
