@@ -22,9 +22,9 @@ import mujoco
 import numpy as np
 
 from colmo.program import parametrize
+from colmo.rollout import as_action
 from colmo.sandbox.namespace import load_policy
 from colmo.specs import load_spec
-from colmo.rollout import as_action
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

@@ -26,8 +26,8 @@ from colmo.evaluation import Evaluator, Executor
 from colmo.executor import make_executor
 from colmo.optimize import CandidateEvaluator, optimize_program
 from colmo.program import ParametricProgram, parametrize
-from colmo.specs import load_spec
 from colmo.rollout import episode_seeds
+from colmo.specs import load_spec
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 MENAGERIE = Path(__file__).resolve().parent.parent.parent / "shared" / "menagerie"

@@ -26,9 +26,9 @@ from pathlib import Path
 from colmo.evaluation import FAST, REFEREE, EvalRequest
 from colmo.executor import LocalExecutor
 from colmo.program import parametrize
+from colmo.rollout import episode_seeds, evaluate_program
 from colmo.sandbox.namespace import Program
 from colmo.specs import load_spec
-from colmo.rollout import episode_seeds, evaluate_program
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 MENAGERIE = Path(__file__).resolve().parent.parent.parent / "shared" / "menagerie"

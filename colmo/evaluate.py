@@ -36,8 +36,8 @@ from colmo.optimize.tune import CandidateEvaluator, calibrated
 from colmo.program import ParametricProgram, parametrize
 from colmo.record import finite_or_none
 from colmo.robustness import RobustnessReport, robustness_report, save, table
-from colmo.specs import Spec, load_task_spec
 from colmo.rollout import episode_seeds, heldout_seeds
+from colmo.specs import Spec, load_task_spec
 
 
 def heldout_evaluator(evaluator: Evaluator, seed: int, episodes: int) -> Evaluator:

@@ -12,9 +12,9 @@ import pytest
 from conftest import compose, last_json_line, run_colmo
 
 from colmo.evaluation import FAST, REFEREE
-from colmo.racing import Race
 from colmo.optimize.tune import CandidateEvaluator
 from colmo.program import parametrize
+from colmo.racing import Race
 
 # Counts its calls in a module global and returns NaN at the 10,000th: the last step of the
 # last of 10 training episodes of 1000 steps, were the episodes one call sequence. (A module

@@ -31,10 +31,10 @@ from colmo.executor import LocalExecutor
 from colmo.generate import Generation, Generator
 from colmo.generate.mutate import MutateGenerator
 from colmo.intake import MAX_ANSWER_CHARS, Unusable, read_program
+from colmo.rollout import episode_seeds
 from colmo.search import Search
 from colmo.specs import load_spec
 from colmo.store import STORE_FILE, ProgramStore
-from colmo.rollout import episode_seeds
 
 TIMEOUT_S = 3
 MEMORY_MB = 512

@@ -10,9 +10,9 @@ from colmo.environments.pendulum import PendulumSwingup
 from colmo.evaluation import REFEREE, EvalRequest
 from colmo.executor import LocalExecutor
 from colmo.program import parametrize
+from colmo.rollout import episode_seeds, evaluate_policy
 from colmo.sandbox.namespace import load_policy
 from colmo.specs import load_spec
-from colmo.rollout import episode_seeds, evaluate_policy
 
 
 def dm_observation(timestep) -> np.ndarray:

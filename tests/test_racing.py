@@ -11,8 +11,8 @@ import pytest
 from conftest import EXAMPLES, compose, last_json_line, run_colmo
 
 from colmo.evaluation import Evaluation
-from colmo.racing import Race
 from colmo.optimize.tune import CandidateEvaluator, optimize_program, tune
+from colmo.racing import Race
 
 # An incumbent's returns on 10 episodes, as a task would give them: they vary by episode.
 INCUMBENT = (100.0, 90.0, 110.0, 95.0, 105.0, 100.0, 98.0, 102.0, 97.0, 103.0)

@@ -19,9 +19,9 @@ from colmo.errors import ConfigError
 from colmo.evaluation import EvalRequest
 from colmo.executor import LocalExecutor, make_executor
 from colmo.program import parametrize
+from colmo.rollout import episode_seeds
 from colmo.search import Search
 from colmo.specs import load_spec
-from colmo.rollout import episode_seeds
 
 requires_ray = pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="Ray is not installed: pip install 'colmo[ray]'")
 

@@ -25,6 +25,7 @@ from conftest import last_json_line, unavailable
 from PIL import Image
 
 from colmo import trace as trace_module
+from colmo.environments.base import Environment
 from colmo.environments.cheetah import Cheetah
 from colmo.environments.pendulum import PendulumSwingup
 from colmo.evaluation import FAST, REFEREE, Evaluator
@@ -35,7 +36,6 @@ from colmo.render.gl import NoGLError
 from colmo.render.plot import plot_episode
 from colmo.render.video import default_camera, render_video, video_frame_steps
 from colmo.specs import load_spec
-from colmo.environments.base import Environment
 from colmo.trace import STATE_SPEC, EpisodeTrace, TraceError, TraceRecorder
 
 REPO = Path(__file__).resolve().parent.parent

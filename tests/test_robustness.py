@@ -9,9 +9,9 @@ from conftest import compose, last_json_line, run_colmo
 from colmo.config import PerturbConfig
 from colmo.environments.perturb import PerturbedEnvironment, with_perturbation
 from colmo.errors import ConfigError
+from colmo.rollout import episode_seeds, evaluate_policy
 from colmo.specs import load_spec
 from colmo.store import run_settings
-from colmo.rollout import episode_seeds, evaluate_policy
 
 SEEDS = episode_seeds(3, 3)
 STEPS = 150

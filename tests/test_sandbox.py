@@ -16,14 +16,14 @@ import time
 import numpy as np
 import pytest
 
+from colmo.environments.base import PolicyFailure
 from colmo.environments.pendulum import PendulumSwingup
 from colmo.evaluation import Evaluation
 from colmo.program import parametrize
+from colmo.rollout import as_action, evaluate_policy
 from colmo.sandbox import ForbiddenProgram, check_program
 from colmo.sandbox.namespace import Program, load_policy
 from colmo.sandbox.referee import RefereeTimeout, write_all
-from colmo.environments.base import PolicyFailure
-from colmo.rollout import as_action, evaluate_policy
 
 IMPORTS = ("numpy", "math")
 

@@ -21,6 +21,7 @@ import pytest
 from colmo.astutil import node_count
 from colmo.environments.pendulum import PendulumSwingup
 from colmo.program import ProgramSize, instantiate, measure, parametrize
+from colmo.rollout import episode_seeds, evaluate_policy
 from colmo.simplify import (
     ProgramFails,
     Scores,
@@ -31,7 +32,6 @@ from colmo.simplify import (
     simplify,
 )
 from colmo.specs import load_spec
-from colmo.rollout import episode_seeds, evaluate_policy
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

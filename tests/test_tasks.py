@@ -18,8 +18,8 @@ import pytest
 from colmo.environments.ball_in_cup import BallInCup
 from colmo.environments.cheetah import Cheetah
 from colmo.environments.quadruped import Quadruped
-from colmo.specs import load_spec
 from colmo.rollout import evaluate_policy
+from colmo.specs import load_spec
 
 TASKS = ("pendulum", "ball_in_cup", "cheetah", "quadruped", "a1")
 

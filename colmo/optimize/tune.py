@@ -29,9 +29,9 @@ import numpy as np
 
 from colmo.errors import ConfigError
 from colmo.evaluation import FAST, REFEREE, Evaluation, Evaluator, Executor
-from colmo.racing import Race
 from colmo.optimize.methods import METHODS
 from colmo.program import ParametricProgram, ProgramSize, instantiate, measure
+from colmo.racing import Race
 
 if TYPE_CHECKING:
     from colmo.config import GFOConfig

@@ -19,12 +19,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional, Sequence
 
+from colmo.environments.base import Environment, MujocoEnvironment
 from colmo.evaluation import REFEREE, Evaluator, Executor
 from colmo.render.gl import NoGLError
 from colmo.render.plot import plot_episode
 from colmo.render.video import render_video
 from colmo.specs import load_spec
-from colmo.environments.base import Environment, MujocoEnvironment
 from colmo.trace import EpisodeTrace, TraceError
 
 PLOT_FILE, VIDEO_FILE = "episode.png", "episode.mp4"

@@ -18,8 +18,8 @@ from typing import Iterator, Optional, Union
 import mujoco
 import numpy as np
 
-from colmo.render.gl import NoGLError, gl_unavailable_reason, select_gl_backend
 from colmo.environments.base import MujocoEnvironment
+from colmo.render.gl import NoGLError, gl_unavailable_reason, select_gl_backend
 from colmo.trace import STATE_SPEC, EpisodeTrace
 
 DEFAULT_FPS = 30.0

@@ -29,9 +29,9 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from colmo.environments.base import PolicyFailure
 from colmo.errors import describe_exception
 from colmo.sandbox.check import NUMPY_SUBMODULES, ForbiddenProgram, attribute_allowed, check_tree, module_allowed, parse_program
-from colmo.environments.base import PolicyFailure
 
 
 def _discard(*args: object, **kwargs: object) -> None:

@@ -42,12 +42,12 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from colmo.environments.base import Environment, PolicyFailure
 from colmo.errors import describe_exception, failure_reason
 from colmo.evaluation import EvalRequest, Evaluation
 from colmo.racing import Race
-from colmo.sandbox.namespace import compile_or_explain
-from colmo.environments.base import Environment, PolicyFailure
 from colmo.rollout import act
+from colmo.sandbox.namespace import compile_or_explain
 from colmo.trace import MAX_STEPS, TraceError, TraceRecorder
 
 _HEADER = struct.Struct("<cI")

@@ -35,13 +35,13 @@ import time
 from multiprocessing.connection import Connection
 from typing import Any, Callable
 
+from colmo.environments.base import Environment
 from colmo.errors import describe_exception
 from colmo.evaluation import FAST, REFEREE, EvalRequest, Evaluation
+from colmo.rollout import evaluate_program
 from colmo.sandbox.confine import enter_sandbox, make_undumpable
 from colmo.sandbox.namespace import compile_or_explain, template
 from colmo.sandbox.referee import LOCKSTEP, RefereeTimeout, referee_evaluation, serve_policy, write_all
-from colmo.environments.base import Environment
-from colmo.rollout import evaluate_program
 
 _PR_SET_PDEATHSIG = 1
 _CLONE_NEWUSER, _CLONE_NEWNET = 0x10000000, 0x40000000

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from colmo.environments.perturb import perturbable
 from colmo.environments.base import Environment
+from colmo.environments.perturb import perturbable
 
 DEFAULT_IMPORTS = ("numpy", "math")
 

@@ -9,9 +9,9 @@
   a `colmo-optimize` job's run.
 """
 
+from colmo.track.backend import CLASSIC_ML, EXPERIMENT_KIND_TAG, VIEW_TAG, connect, default_tracking_uri, open_experiment, retry_locked, sqlite_path, ui_path
 from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE
 from colmo.track.runs import PLOT_FILE, MlflowTracker, TrackedRun, draw_best_so_far, flatten, make_tracker, start_run, track_optimize
-from colmo.track.backend import CLASSIC_ML, EXPERIMENT_KIND_TAG, VIEW_TAG, connect, default_tracking_uri, open_experiment, retry_locked, sqlite_path, ui_path
 from colmo.track.sweep import SWEEP_TAG
 
 __all__ = [

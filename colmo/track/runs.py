@@ -58,8 +58,8 @@ from mlflow.utils.mlflow_tags import MLFLOW_LOGGED_ARTIFACTS, MLFLOW_PARENT_RUN_
 from colmo.config import OptimizeConfig, SearchConfig
 from colmo.record import BatchReport, SampleRecord, Summary
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
-from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE, program_row, programs_page
 from colmo.track.backend import FAILED, FINISHED, KILLED, default_tracking_uri, log_metrics, log_params, open_experiment, retry_locked, sqlite_path, ui_path
+from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE, program_row, programs_page
 from colmo.track.sweep import sweep_parent, update_parent
 
 log = logging.getLogger("colmo.track")
