@@ -40,6 +40,9 @@ class Prompt:
     programs: list[str]  # the shown programs' code as stored, ascending score
     island: int
     parent_keys: list[str]
+    # Which regeneration of a duplicate answer this prompt asks for (0: a first answer); language
+    # models sample it hotter (`LanguageModelConfig.temperature_for`).
+    retry: int = 0
 
 
 def _system_message(function_name: str, args: str, constants_tuned: bool) -> str:

@@ -560,6 +560,16 @@ def test_llamacpp_loads_the_model_once_and_samples_the_batch_with_fresh_seeds(fa
     assert all(g.seconds >= 0 for g in generations) and llm.closed
 
 
+def test_a_regenerated_duplicate_is_sampled_hotter_up_to_max_temperature(fake_llama_cpp, gguf):
+    cfg = LlamaCppConfig(model_path=gguf, temperature=0.8, retry_temperature_step=0.3, max_temperature=1.2)
+    generator = make_generator(cfg, seed=0)
+    for retry in range(4):
+        generator.generate(Prompt(text=PROMPT_TEXT, messages=MESSAGES, programs=[STARTER], island=0, parent_keys=[], retry=retry), 1)
+    generator.close()
+    assert [call["temperature"] for call in FakeLlama.instances[0].calls] == pytest.approx([0.8, 1.1, 1.2, 1.2])
+    assert LlamaCppConfig(model_path=gguf, temperature=2.0, max_temperature=1.5).temperature_for(3) == 2.0  # never below llm.temperature
+
+
 def test_llamacpp_completion_form_continues_the_prompt_text(fake_llama_cpp, gguf):
     generator = make_generator(LlamaCppConfig(model_path=gguf), seed=0)  # the default form
     [generation] = generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 1)

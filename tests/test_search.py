@@ -192,6 +192,7 @@ def test_a_duplicate_answer_is_generated_again_and_every_model_call_counts(tmp_p
     # One sample, made of three model calls: two copies of the starter thrown away, then a new program.
     assert rows == [("evaluated", 3, 30, 15, pytest.approx(1.5))]
     assert len(generator.prompts) == 3 and not generator.answers
+    assert [prompt.retry for prompt in generator.prompts] == [0, 1, 2]  # a language model samples each retry hotter
     assert summary.samples == 3 and summary.programs_evaluated == 1 and summary.duplicates_skipped == 0
     assert summary.duplicate_rate == pytest.approx(2 / 3)
     assert all("constants" in prompt.text and "tuned" in prompt.text for prompt in generator.prompts)  # gfo=oneplusone

@@ -45,14 +45,23 @@ class LanguageModelConfig(GeneratorConfig):
         "ending with the header of the function to write, for the model to continue (base and code models)",
     )
     temperature: float = option(1.0, "sampling temperature")
+    retry_temperature_step: float = option(
+        0.25, "each regeneration of a duplicate answer (search.duplicate_retries) samples this much hotter ...",
+    )
+    max_temperature: float = option(1.5, "... up to this temperature (never below llm.temperature)")
     top_p: float = option(1.0, "nucleus sampling: the smallest set of tokens with this much probability")
     max_tokens: int = option(1024, "most tokens per answer")
 
     def __post_init__(self) -> None:
         super().__post_init__()
         require(self.prompt_format in PROMPT_FORMATS, f"llm.prompt_format must be chat or completion, got {self.prompt_format!r}")
-        at_least(self, "llm", temperature=0, max_tokens=1)
+        at_least(self, "llm", temperature=0, retry_temperature_step=0, max_tokens=1)
         require(0 < self.top_p <= 1, f"llm.top_p must be in (0, 1], got {self.top_p}")
+
+    def temperature_for(self, retry: int) -> float:
+        """The sampling temperature of an answer's `retry`-th regeneration (0: its first answer):
+        a model that copied a shown program at one temperature is asked again hotter, bounded."""
+        return max(self.temperature, min(self.temperature + retry * self.retry_temperature_step, self.max_temperature))
 
 
 @dataclass

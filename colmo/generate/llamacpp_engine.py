@@ -76,7 +76,7 @@ class LlamaCppGenerator(Generator):
     def _sample(self, prompt: Prompt) -> Generation:
         cfg = self.cfg
         sampling = dict(
-            temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self.request_seed(),
+            temperature=cfg.temperature_for(prompt.retry), top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self.request_seed(),
             logits_processor=self._until_cancelled,
         )
         chat = cfg.prompt_format == "chat"

@@ -165,7 +165,7 @@ class OpenAIGenerator(Generator):
     def _send(self, server: _Server, prompt: Prompt, n: int, seed: int) -> Any:
         cfg = self.cfg
         sampling = dict(
-            model=cfg.model, temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=seed,
+            model=cfg.model, temperature=cfg.temperature_for(prompt.retry), top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=seed,
             **({"n": n} if n > 1 else {}),
         )
         if cfg.prompt_format == "chat":

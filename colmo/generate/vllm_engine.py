@@ -38,7 +38,8 @@ class VLLMGenerator(Generator):
         cfg = self.cfg
         chat = cfg.prompt_format == "chat"
         params = self._sampling_params(
-            n=n, temperature=cfg.temperature, top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self.request_seed(),  # the engine's seed is the config's
+            # the engine's seed is the config's; each request gets its own
+            n=n, temperature=cfg.temperature_for(prompt.retry), top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self.request_seed(),
             **({} if chat else {"stop": list(COMPLETION_STOP)}),
         )
         start = time.perf_counter()
