@@ -30,6 +30,7 @@ do the same; a second one cancels the evaluations in flight, whose samples are s
 from __future__ import annotations
 
 import concurrent.futures
+import dataclasses
 import logging
 import os
 import threading
@@ -255,8 +256,10 @@ class Search:
     def _samples_left(self) -> int:
         return self.cfg.search.max_samples - self.counters.samples - self.in_flight_samples
 
-    def _prompt(self) -> Prompt:
-        return build_prompt(self.spec.description, self.database.select(), constants_tuned=self.cfg.gfo.tunes_constants)
+    def _prompt(self, retry: int = 0) -> Prompt:
+        """A prompt from a new selection of the database; `retry`: the regeneration of a duplicate it is for."""
+        prompt = build_prompt(self.spec.description, self.database.select(), constants_tuned=self.cfg.gfo.tunes_constants)
+        return dataclasses.replace(prompt, retry=retry)
 
     def _generate(self) -> Optional[_Batch]:
         """Generate the next batch and start evaluating it; None if the search is stopping."""
@@ -303,14 +306,15 @@ class Search:
 
     def _regenerate_duplicates(self, answers: list[_Answer], calls_left: int) -> list[_Answer]:
         """`answers` with each duplicate generated again, from a new selection of the database (a
-        fresh seed comes with every request), up to `search.duplicate_retries` times and within
+        fresh seed comes with every request, and a language model samples each retry hotter,
+        `llm.retry_temperature_step`), up to `search.duplicate_retries` times and within
         `calls_left` model calls: a model's copy of a shown program would waste its turn. A
         regenerated answer carries the calls, tokens and seconds of the ones it replaces."""
-        for _ in range(self.cfg.search.duplicate_retries):
+        for retry in range(1, self.cfg.search.duplicate_retries + 1):
             repeated = self._duplicates(answers)[: max(calls_left, 0)]
             if not repeated:
                 break
-            prompt = self._prompt()
+            prompt = self._prompt(retry)
             fresh = self._generated(prompt, len(repeated))
             if fresh is None:  # stopping: the answers so far are stored
                 break
