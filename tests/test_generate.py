@@ -571,7 +571,7 @@ def test_a_regenerated_duplicate_is_sampled_hotter_up_to_max_temperature(fake_ll
 
 
 def test_llamacpp_completion_form_continues_the_prompt_text(fake_llama_cpp, gguf):
-    generator = make_generator(LlamaCppConfig(model_path=gguf), seed=0)  # the default form
+    generator = make_generator(LlamaCppConfig(model_path=gguf, prompt_format="completion"), seed=0)
     [generation] = generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 1)
     [call] = FakeLlama.instances[0].calls
     assert call["prompt"] == PROMPT_TEXT and call["stop"] == list(COMPLETION_STOP)
