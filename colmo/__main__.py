@@ -12,6 +12,7 @@ from colmo.cli import hydra_app
 from colmo.config import SearchConfig
 from colmo.specs import load_task_spec
 from colmo.store import open_for_resume, run_settings
+from colmo.trackers import make_tracker
 
 
 def check_inputs(cfg: SearchConfig) -> None:
@@ -32,12 +33,7 @@ def main(cfg: SearchConfig) -> Optional[float]:
     from colmo.search import Search
 
     run_dir = Path(HydraConfig.get().runtime.output_dir)
-    observers: tuple = ()
-    if cfg.tracker.name == "mlflow":
-        from colmo.track import make_tracker
-
-        observers += (make_tracker(cfg, run_dir),)
-    search = Search(cfg, run_dir, observers)
+    search = Search(cfg, run_dir, make_tracker(cfg.tracker).search_observers(cfg, run_dir))
     with progress(search):
         summary = search.run()
     print(summary.best_code or "")

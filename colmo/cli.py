@@ -242,8 +242,15 @@ def _field_lines(node: DictConfig, prefix: str) -> list[str]:
     lines = []
     for item in dataclasses.fields(schema):
         if "help" in item.metadata:
-            lines += [f"  {prefix}{item.name}={_shown(node, item.name)}", *_wrapped(item.metadata["help"], 6)]
+            lines += [f"  {prefix}{item.name}={_shown(node, item.name)}", *_wrapped(_field_help(schema, item), 6)]
     return lines
+
+
+def _field_help(schema: type, item: dataclasses.Field) -> str:
+    """A field's documentation; for one naming a component, with the names its registry has."""
+    if "registry" not in item.metadata:
+        return item.metadata["help"]
+    return f"{item.metadata['help']}: one of {config.fields.registry_of(schema, item.name).choices()}"
 
 
 def _program_name(config_name: str) -> str:

@@ -8,39 +8,37 @@ import os
 from dataclasses import dataclass
 from typing import Optional
 
-from colmo.config.fields import above, at_least, option, require
+from colmo.config.fields import above, at_least, check_component, component, option, require
 
 
 @dataclass
 class GFOConfig:
     """The gradient-free optimizer that tunes each program's constants."""
 
-    method: str = option("oneplusone", "none, or a registered method: oneplusone, cma, de, bo")
+    method: str = component("oneplusone", "the method the gfo option runs", "colmo.optimize.methods:METHODS")
     budget: int = option(100, "evaluations per program, its own constants included")
     workers: int = option(1, "candidates evaluated at a time, where the method allows it")
     relative_step: float = option(0.3, "initial step of each constant, relative to its magnitude")
     min_step: float = option(0.1, "floor of the initial step, for constants near 0")
     racing: Optional[bool] = option(
         None, "stop a candidate's episodes once a paired test on the same seeds says it very likely cannot beat the best "
-        "(colmo.racing.Race); null: on for the comparison-based methods (oneplusone, cma, de)",
+        "(colmo.racing.Race); null: on for the comparison-based methods (the ES, CMA-ES and DE)",
     )
     racing_min_episodes: int = option(2, "episodes a candidate always runs before racing may stop it (at least 2: the test needs a spread)")
     racing_margin: float = option(0.002, "racing also stops a candidate unlikely to beat the best by more than this fraction of its return")
 
     def __post_init__(self) -> None:
-        from colmo.optimize.methods import METHODS
-
-        names = ("none", *METHODS)
-        require(self.method in names, f"gfo.method must be one of {', '.join(names)}; got {self.method!r}")
-        require(self.method != "bo" or isinstance(self, BOConfig), "gfo.method=bo needs the bo options: use gfo=bo")
+        check_component(self, "method")
         at_least(self, "gfo", budget=1, workers=1, racing_min_episodes=2, racing_margin=0)
         above(self, "gfo", relative_step=0, min_step=0)
 
     @property
     def tunes_constants(self) -> bool:
-        """Whether the method changes a program's constants: every method but `none`, which
-        evaluates the program as written."""
-        return self.method != "none"
+        """Whether the method changes a program's constants, as it declares (`gfo=none`, which
+        evaluates each program as written, does not)."""
+        from colmo.optimize.methods import METHODS
+
+        return METHODS[self.method].tunes_constants
 
     @property
     def racing_on(self) -> bool:
@@ -48,7 +46,7 @@ class GFOConfig:
             return self.racing
         from colmo.optimize.methods import METHODS
 
-        return self.method in METHODS and METHODS[self.method].comparison_based
+        return METHODS[self.method].comparison_based
 
 
 @dataclass
@@ -69,15 +67,14 @@ class BOConfig(GFOConfig):
 class ExecutorConfig:
     """Where evaluations run: sandboxed worker processes on this machine."""
 
-    name: str = option("local", "local or ray")
+    name: str = component("local", "the executor the executor option runs", "colmo.executor:EXECUTORS")
     workers: int = option(0, "worker processes; 0: one per core this process may use")
     timeout_s: Optional[float] = option(None, "wall-clock limit per evaluation; null: derived from the task (30 x the starter's time, at least 10 s)")
     memory_mb: int = option(4096, "address-space limit of each worker and of each program's process")
     max_retries: int = option(2, "an evaluation whose worker dies is retried this often, then recorded as failed")
 
     def __post_init__(self) -> None:
-        require(self.name in ("local", "ray"), f"executor.name must be local or ray; got {self.name!r}")
-        require(self.name != "ray" or isinstance(self, RayExecutorConfig), "executor.name=ray needs the ray options: use executor=ray")
+        check_component(self, "name")
         at_least(self, "executor", max_retries=0, memory_mb=256)
         require(self.workers >= 0, f"executor.workers must be >= 0 (0 = all cores), got {self.workers}")
         require(self.timeout_s is None or self.timeout_s > 0, f"executor.timeout_s must be > 0, got {self.timeout_s}")
@@ -99,13 +96,12 @@ class RayExecutorConfig(ExecutorConfig):
 
 @dataclass
 class TrackerConfig:
-    """Run tracking: `none` keeps only the run directory."""
+    """Run tracking (`colmo.trackers`): `tracker=none` keeps only the run directory."""
 
-    name: str = option("none", "mlflow or none")
+    name: str = component("none", "the tracker the tracker option runs", "colmo.trackers:TRACKERS")
 
     def __post_init__(self) -> None:
-        require(self.name in ("mlflow", "none"), f"tracker.name must be mlflow or none, got {self.name!r}")
-        require(self.name != "mlflow" or isinstance(self, MlflowConfig), "tracker.name=mlflow needs the mlflow options: use tracker=mlflow")
+        check_component(self, "name")
 
 
 @dataclass

@@ -1,12 +1,18 @@
-"""The building blocks of every schema: a documented field (`option`) and the checks that turn a
-bad value into one `ConfigError` line (`require`, `at_least`, `above`)."""
+"""The building blocks of every schema: a documented field (`option`), a field naming a registered
+component (`component`), and the checks that turn a bad value into one `ConfigError` line
+(`require`, `at_least`, `above`, `check_component`)."""
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
 from dataclasses import field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from colmo.errors import ConfigError
+
+if TYPE_CHECKING:
+    from colmo.registry import Registry
 
 
 def require(condition: bool, message: str) -> None:
@@ -33,3 +39,28 @@ def option(default: Any, help: str) -> Any:  # noqa: A002 - the documented name
     if isinstance(default, (dict, list)):
         return field(default_factory=lambda: type(default)(default), metadata={"help": help})
     return field(default=default, metadata={"help": help})
+
+
+def component(default: Any, help: str, registry: str) -> Any:  # noqa: A002 - the documented name
+    """A schema field naming a registered component (`colmo.registry`). `registry` says where
+    its registry is, `module:NAME`: imported when a name is checked or shown, since the modules
+    that define the components import these schemas."""
+    return field(default=default, metadata={"help": help, "registry": registry})
+
+
+def registry_of(schema: Any, name: str) -> Registry:
+    """The registry of the `component` field `name` of a schema (a dataclass or an instance),
+    declared where the field is (a subclass may give it another default: `BOConfig.method`)."""
+    schema = schema if isinstance(schema, type) else type(schema)
+    for base in schema.__mro__:
+        metadata = {item.name: item.metadata for item in dataclasses.fields(base)}.get(name, {}) if dataclasses.is_dataclass(base) else {}
+        if "registry" in metadata:
+            module, attribute = metadata["registry"].split(":")
+            return getattr(importlib.import_module(module), attribute)
+    raise TypeError(f"{schema.__name__}.{name} is not a component field")
+
+
+def check_component(config: Any, name: str) -> None:
+    """`ConfigError` unless the `component` field `name` of `config` names a registered
+    component whose option schema `config` is."""
+    registry_of(config, name).check(getattr(config, name), config)

@@ -1,4 +1,5 @@
-"""The dispatcher both executors share: a job queue served by one thread per worker slot.
+"""The dispatcher both executors share: a job queue served by one thread per worker slot, and
+the registry `executor.name` picks from (`EXECUTORS`, filled where each executor is defined).
 
 A slot is whatever evaluates one request at a time: a local sandbox process, a Ray actor.
 Each slot's thread opens its worker (again after a loss), takes the next request as soon as it
@@ -21,9 +22,11 @@ import queue
 import threading
 import time
 from dataclasses import dataclass
-from typing import Optional, Sequence
+from typing import ClassVar, Optional, Sequence
 
+from colmo.config import ExecutorConfig
 from colmo.evaluation import CANCELLED, EvalRequest, Evaluation, ExecutorClosed, WorkerLost
+from colmo.registry import Registry
 
 log = logging.getLogger("colmo.executor")
 
@@ -38,9 +41,20 @@ class _Job:
     retries: int = 0
 
 
+EXECUTORS: Registry[type["Dispatcher"]] = Registry("executor.name")
+
+
 class Dispatcher(abc.ABC):
     """Evaluates requests on `n_workers` slots (module docstring). Subclasses say how a slot's
-    worker starts, evaluates and stops, then call `_start_dispatching()`."""
+    worker starts, evaluates and stops, then call `_start_dispatching()`. An executor registers
+    as `executor=<name>` (`@EXECUTORS.register`) and is built by `from_config`."""
+
+    options: ClassVar[type[ExecutorConfig]] = ExecutorConfig  # the schema of its `executor` option
+
+    @classmethod
+    @abc.abstractmethod
+    def from_config(cls, cfg: ExecutorConfig, max_workers: Optional[int] = None) -> "Dispatcher":
+        """The executor `cfg` describes, with at most `max_workers` workers when given."""
 
     def __init__(self, n_workers: int, max_retries: int):
         self.n_workers = n_workers

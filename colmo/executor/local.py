@@ -6,11 +6,13 @@ import shutil
 import tempfile
 from typing import Optional
 
+from colmo.config import ExecutorConfig
 from colmo.evaluation import EvalRequest, Evaluation
-from colmo.executor.dispatch import Dispatcher
+from colmo.executor.dispatch import EXECUTORS, Dispatcher
 from colmo.sandbox.process import SandboxProcess
 
 
+@EXECUTORS.register("local")
 class LocalExecutor(Dispatcher):
     """`workers` sandbox worker processes (`colmo.sandbox.worker`), each started lazily by the
     thread that uses it (the worker's parent-death signal follows that thread, which lives as
@@ -22,6 +24,10 @@ class LocalExecutor(Dispatcher):
         self.tmpdir = tempfile.mkdtemp(prefix="colmo-sandbox-")
         self._processes: list[Optional[SandboxProcess]] = [None] * workers
         self._start_dispatching()
+
+    @classmethod
+    def from_config(cls, cfg: ExecutorConfig, max_workers: Optional[int] = None) -> "LocalExecutor":
+        return cls(min(cfg.n_workers, max_workers) if max_workers else cfg.n_workers, cfg.memory_mb, cfg.max_retries)
 
     def worker_pids(self) -> list[int]:
         """Process ids of the running worker processes."""

@@ -17,10 +17,10 @@ import os
 from pathlib import Path
 from typing import Any, Optional
 
-from colmo.config import ExecutorConfig
+from colmo.config import ExecutorConfig, RayExecutorConfig
 from colmo.errors import ConfigError, one_line
 from colmo.evaluation import EvalRequest, Evaluation, WorkerLost
-from colmo.executor.dispatch import Dispatcher
+from colmo.executor.dispatch import EXECUTORS, Dispatcher
 from colmo.executor.local import LocalExecutor
 
 log = logging.getLogger("colmo.executor")
@@ -45,9 +45,12 @@ class _EvaluationActor:
         self.executor.close()
 
 
+@EXECUTORS.register("ray")
 class RayExecutor(Dispatcher):
     """Evaluations on the Ray cluster at `cfg.address`, one actor per CPU (or `cfg.workers`);
     in a process already connected to Ray, on that cluster."""
+
+    options = RayExecutorConfig
 
     def __init__(self, cfg: ExecutorConfig, max_workers: Optional[int] = None):
         ray = _import_ray()
@@ -77,6 +80,10 @@ class RayExecutor(Dispatcher):
             self._shutdown_ray()
             raise ConfigError(f"executor=ray: the evaluation actors did not start: {one_line(error)}") from None
         self._start_dispatching()
+
+    @classmethod
+    def from_config(cls, cfg: ExecutorConfig, max_workers: Optional[int] = None) -> "RayExecutor":
+        return cls(cfg, max_workers)
 
     def worker_pids(self) -> list[int]:
         """Process ids of the live actors (on their nodes)."""

@@ -6,7 +6,7 @@
 - `__main__`: `python -m colmo.optimize`, which tunes one policy file.
 """
 
-from colmo.optimize.methods import METHODS, Method, register
+from colmo.optimize.methods import METHODS, Method
 from colmo.optimize.tune import (
     DISPLAY_DIGITS,
     CandidateEvaluator,
@@ -20,5 +20,5 @@ from colmo.optimize.tune import (
 
 __all__ = [
     "DISPLAY_DIGITS", "METHODS", "CandidateEvaluator", "Method", "ProgramResult", "Tuning",
-    "optimize_program", "register", "round_significant", "step_sizes", "tune",
+    "optimize_program", "round_significant", "step_sizes", "tune",
 ]

@@ -1,7 +1,9 @@
 """Gradient-free optimization methods behind one ask/tell interface, in one registry.
 
-Each method registers itself where it is defined (`@register`), and the `gfo.method` option
-is validated against the registry's names (`colmo.config`), so there is one list. Methods
+Each method registers itself where it is defined (`@METHODS.register`, `colmo.registry`), and
+the `gfo.method` option is validated against the registry's names (`colmo.config`), so there is
+one list. `none` is a method too (`EvaluateOnce`): it tunes nothing, which it declares
+(`tunes_constants`), and whoever must know reads that, not the name. Methods
 search in normalized coordinates `z` (`params = x0 + step * z`, see `colmo.optimize.tune`):
 `z = 0` is the program's own constants, which every method asks for first.
 
@@ -25,15 +27,13 @@ from __future__ import annotations
 
 import abc
 import importlib.util
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Optional
+from typing import Any, ClassVar, Optional
 
 import numpy as np
 
+from colmo.config import BOConfig, GFOConfig
 from colmo.errors import ConfigError
-
-if TYPE_CHECKING:
-    from colmo.config import GFOConfig
+from colmo.registry import Registry
 
 # Loss handed to a method for a failed candidate: worse than any real score, but finite,
 # since some methods average or rank losses.
@@ -41,7 +41,14 @@ _FAILED_LOSS = 1e12
 
 
 class Method(abc.ABC):
-    """Ask/tell over normalized coordinates; higher scores are better."""
+    """Ask/tell over normalized coordinates; higher scores are better. A method registers
+    itself as `gfo=<name>` (`@METHODS.register`) and is built as `cls(dim, cfg, seed)`."""
+
+    options: ClassVar[type[GFOConfig]] = GFOConfig  # the schema of its `gfo` option
+    comparison_based: ClassVar[bool]  # only the order of the scores it is told matters to it
+    # Whether it changes a program's constants; one that does not scores each program once, as
+    # written, and a program differing from an evaluated one only in its constants is then new.
+    tunes_constants: ClassVar[bool] = True
 
     @abc.abstractmethod
     def ask(self) -> tuple[Any, np.ndarray]:
@@ -53,32 +60,39 @@ class Method(abc.ABC):
         `Race.estimate`, its estimated mean over all episodes (see the module docstring)."""
 
 
-@dataclass(frozen=True)
-class MethodEntry:
-    make: Callable[[int, "GFOConfig", int], Method]  # (dimension, config, seed)
-    comparison_based: bool
+METHODS: Registry[type[Method]] = Registry("gfo.method")
 
 
-METHODS: dict[str, MethodEntry] = {}
+@METHODS.register("none")
+class EvaluateOnce(Method):
+    """No tuning: each program is evaluated once, with its constants as written (the paper's
+    'no GFO' baseline). Its one candidate is the program's own constants, `z = 0`."""
 
+    comparison_based = False
+    tunes_constants = False
 
-def register(name: str, comparison_based: bool) -> Callable[[Callable[[int, "GFOConfig", int], Method]], Callable[[int, "GFOConfig", int], Method]]:
-    """Decorator for a method factory `(dim, cfg, seed) -> Method`: makes it `gfo=<name>`."""
+    def __init__(self, dim: int, cfg: GFOConfig, seed: int):
+        self.dim = dim
 
-    def add(make: Callable[[int, "GFOConfig", int], Method]) -> Callable[[int, "GFOConfig", int], Method]:
-        METHODS[name] = MethodEntry(make, comparison_based)
-        return make
+    def ask(self) -> tuple[Any, np.ndarray]:
+        return None, np.zeros(self.dim)
 
-    return add
+    def tell(self, token: Any, score: Optional[float]) -> None:
+        """Nothing to learn: there is no other candidate."""
 
 
 class NevergradMethod(Method):
-    def __init__(self, optimizer_name: str, dim: int, cfg: "GFOConfig", seed: int):
+    """A Nevergrad optimizer (`optimizer_name` in its registry) started at `z = 0`."""
+
+    optimizer_name: ClassVar[str]
+    comparison_based = True
+
+    def __init__(self, dim: int, cfg: GFOConfig, seed: int):
         import nevergrad as ng  # seconds to import: only when a run tunes something
 
         parametrization = ng.p.Array(init=np.zeros(dim))
         parametrization.random_state = np.random.RandomState(seed)
-        self.optimizer = ng.optimizers.registry[optimizer_name](
+        self.optimizer = ng.optimizers.registry[self.optimizer_name](
             parametrization=parametrization, budget=cfg.budget, num_workers=cfg.workers
         )
         self.optimizer.suggest(np.zeros(dim))
@@ -91,29 +105,35 @@ class NevergradMethod(Method):
         self.optimizer.tell(token, _FAILED_LOSS if score is None else -score)
 
 
-@register("oneplusone", comparison_based=True)
-def one_plus_one(dim: int, cfg: "GFOConfig", seed: int) -> Method:
+@METHODS.register("oneplusone")
+class OnePlusOne(NevergradMethod):
     """Nevergrad's (1+1)-ES, the paper's choice."""
-    return NevergradMethod("OnePlusOne", dim, cfg, seed)
+
+    optimizer_name = "OnePlusOne"
 
 
-@register("cma", comparison_based=True)
-def cma(dim: int, cfg: "GFOConfig", seed: int) -> Method:
+@METHODS.register("cma")
+class CMA(NevergradMethod):
     """Nevergrad's CMA-ES."""
-    return NevergradMethod("CMA", dim, cfg, seed)
+
+    optimizer_name = "CMA"
 
 
-@register("de", comparison_based=True)
-def differential_evolution(dim: int, cfg: "GFOConfig", seed: int) -> Method:
+@METHODS.register("de")
+class DifferentialEvolution(NevergradMethod):
     """Nevergrad's TwoPointsDE."""
-    return NevergradMethod("TwoPointsDE", dim, cfg, seed)
+
+    optimizer_name = "TwoPointsDE"
 
 
-@register("bo", comparison_based=False)
+@METHODS.register("bo")
 class OptunaMethod(Method):
     """Optuna's Bayesian optimization, TPE (default) or GP sampler, within ±`search_range` steps."""
 
-    def __init__(self, dim: int, cfg: "GFOConfig", seed: int):
+    options = BOConfig
+    comparison_based = False
+
+    def __init__(self, dim: int, cfg: BOConfig, seed: int):
         import optuna
 
         optuna.logging.set_verbosity(optuna.logging.WARNING)

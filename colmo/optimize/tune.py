@@ -102,16 +102,16 @@ def tune(evaluate: CandidateEvaluator, x0: Sequence[float], cfg: "GFOConfig", se
     """Maximize the score over the parameters, starting from (and first evaluating) `x0`,
     until the budget is spent or `stop()` says so. The objective is deterministic (fixed
     episode seeds), so the best candidate seen is the answer. A program that fails with its
-    own constants is not tuned."""
+    own constants is not tuned, nor is any by a method that does not tune (`gfo=none`)."""
     x0 = np.asarray(x0, dtype=float)
     initial = evaluate.fast([x0])[0]
     best_params, best = x0, initial
     evaluations, steps, raced_out, cut_short = 1, initial.steps, 0, False
-    if cfg.tunes_constants and len(x0) and not initial.failure:
-        method = METHODS[cfg.method].make(len(x0), cfg, seed)
+    if len(x0) and not initial.failure:
+        method = METHODS[cfg.method](len(x0), cfg, seed)
         method.tell(method.ask()[0], initial.score)  # the first ask is z = 0, i.e. x0
         scale = step_sizes(x0, cfg)
-        while evaluations < cfg.budget:
+        while method.tunes_constants and evaluations < cfg.budget:
             if stop():
                 cut_short = True
                 break

@@ -50,9 +50,14 @@ class RunCurves:
     per_island: list[list[float]] = field(default_factory=list)
 
     @property
+    def tunes_constants(self) -> bool:
+        """Whether the run's GFO method changes constants (`gfo=none` does not)."""
+        return METHODS[self.method].tunes_constants
+
+    @property
     def order(self) -> tuple:
-        """No GFO first, then the GFO methods in config order, by budget; then seeds."""
-        return (self.task, ("none", *METHODS).index(self.method), self.budget if self.method != "none" else 0, self.variant, self.seed)
+        """The GFO methods in registry order (no GFO first), by budget when tuning; then seeds."""
+        return (self.task, list(METHODS).index(self.method), self.budget if self.tunes_constants else 0, self.variant, self.seed)
 
     @property
     def final(self) -> float:
@@ -77,7 +82,7 @@ class Variant:
 
     @property
     def gfo(self) -> bool:
-        return self.runs[0].method != "none"
+        return self.runs[0].tunes_constants
 
 
 @dataclass
@@ -209,8 +214,8 @@ def _name_variants(curves: list[RunCurves]) -> None:
         shared = set.intersection(*(set(s) for s in settings)) - set(_VARIANT_BASE)
         differing = sorted(key for key in shared if len({s[key] for s in settings}) > 1)
         for curve, setting in zip(runs, settings):
-            base = NO_GFO if curve.method == "none" else f"{curve.method}, budget {curve.budget}"
-            extra = [f"{key}={setting[key]}" for key in differing if not (curve.method == "none" and key.startswith("gfo."))]
+            base = f"{curve.method}, budget {curve.budget}" if curve.tunes_constants else NO_GFO
+            extra = [f"{key}={setting[key]}" for key in differing if curve.tunes_constants or not key.startswith("gfo.")]
             curve.variant = ", ".join([base, *extra])
 
 

@@ -278,7 +278,7 @@ def _choices() -> dict[str, str]:
     return dict(HydraConfig.get().runtime.choices)
 
 
-def make_tracker(cfg: SearchConfig, run_dir: Path) -> MlflowTracker:
+def start_search_run(cfg: SearchConfig, run_dir: Path) -> MlflowTracker:
     """Start this Hydra job's MLflow run for a search into `run_dir`; call inside the Hydra app.
     Builds nothing of the task: a spec that fails is the search's to report."""
     choices = _choices()

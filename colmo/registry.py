@@ -1,0 +1,65 @@
+"""The one way a config option picks a component: a `Registry` of each kind, by name.
+
+Generators (`llm.name`), GFO methods (`gfo.method`), executors (`executor.name`) and trackers
+(`tracker.name`) each have one registry, filled where each component is defined
+(`@REGISTRY.register("name")`, as Nevergrad's optimizers and evosax's strategies are). A
+registry rather than Hydra's `_target_` + `instantiate`: a request stays plain data (a name
+and typed fields), a name is checked against the registered ones before Hydra starts, and error
+messages and help list the names from the registry itself. Each component says which option
+schema it needs (`options`, a class of `colmo.config`), so an option file that sets a name its
+schema does not fit ends in one line too.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from typing import Any, Callable, Generic, TypeVar
+
+from colmo.errors import ConfigError
+
+T = TypeVar("T")
+
+
+class Registry(Mapping[str, T], Generic[T]):
+    """Components of one kind by name, in registration order. `key` is the config field that
+    names one (`gfo.method`); its group (`gfo`) is the option that sets it."""
+
+    def __init__(self, key: str) -> None:
+        self.key = key
+        self.group = key.split(".")[0]
+        self._entries: dict[str, T] = {}
+
+    def register(self, name: str) -> Callable[[T], T]:
+        """Decorator: make the component available as `<key>=<name>`."""
+
+        def add(component: T) -> T:
+            self._entries[name] = component
+            return component
+
+        return add
+
+    def __getitem__(self, name: str) -> T:
+        return self._entries[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._entries)
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+    def choices(self) -> str:
+        """The registered names, for an error message or help: `a, b, c`."""
+        return ", ".join(sorted(self._entries))
+
+    def chosen(self, name: str) -> T:
+        """The component `name` registers; `ConfigError` listing the names if there is none."""
+        if name not in self._entries:
+            raise ConfigError(f"{self.key} must be one of {self.choices()}; got {name!r}")
+        return self._entries[name]
+
+    def check(self, name: str, options: Any) -> None:
+        """`ConfigError` unless `name` is registered and `options` (the composed option's
+        config object) is of the schema its component needs (`options` class attribute)."""
+        component: Any = self.chosen(name)
+        if not isinstance(options, component.options):
+            raise ConfigError(f"{self.key}={name} needs the {name} options: use {self.group}={name}")
