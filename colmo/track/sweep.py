@@ -13,12 +13,12 @@ launcher it is briefly FINISHED).
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
 from mlflow import MlflowClient
 from mlflow.utils.mlflow_tags import MLFLOW_PARENT_RUN_ID
 
+from colmo.sweep_comparison import sweep_id
 from colmo.track.backend import FAILED, FINISHED, KILLED, RUNNING, file_lock, log_metrics, retry_locked
 
 SWEEP_TAG = "colmo.sweep"
@@ -28,15 +28,15 @@ SWEEP_LOCK = ".mlflow_parent.lock"
 def sweep_parent(client: MlflowClient, experiment_id: str, sweep_dir: Path, name: str, tags: dict[str, str]) -> str:
     """The id of the parent run of the sweep writing into `sweep_dir`, in `experiment_id`: made
     by the first job that asks, found by the others (under a lock in the sweep directory)."""
-    sweep_id = hashlib.sha1(str(sweep_dir).encode()).hexdigest()[:16]
+    tag = sweep_id(sweep_dir)
     with file_lock(sweep_dir / SWEEP_LOCK):
-        found = retry_locked(client.search_runs, [experiment_id], f"tags.`{SWEEP_TAG}` = '{sweep_id}'", max_results=1)
+        found = retry_locked(client.search_runs, [experiment_id], f"tags.`{SWEEP_TAG}` = '{tag}'", max_results=1)
         if found:
             parent = found[0].info
             if parent.status != RUNNING:  # a job of the basic launcher after the one before ended
                 retry_locked(client.update_run, parent.run_id, status=RUNNING)
             return parent.run_id
-        tags = {**tags, SWEEP_TAG: sweep_id, "colmo.sweep_dir": str(sweep_dir)}
+        tags = {**tags, SWEEP_TAG: tag, "colmo.sweep_dir": str(sweep_dir)}
         multirun = sweep_dir / "multirun.yaml"  # written by Hydra's basic sweeper before any job
         if multirun.is_file():
             from omegaconf import OmegaConf

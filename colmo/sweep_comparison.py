@@ -1,0 +1,100 @@
+"""The end of a `-m` sweep: its jobs side by side, one line each, and the command for the report.
+
+`CompareJobs` is a Hydra callback (`hydra.callbacks` in colmo/conf/search.yaml); when every job
+of a sweep has ended (`on_multirun_end`) it reads what each job wrote in the sweep directory, its
+`summary.json` and the overrides Hydra saved, whatever launcher ran it, and prints::
+
+    sweep multirun/2026-12-02_18-20-00: 4 jobs
+      job  variant          best  held-out  samples
+        0  gfo=oneplusone  186.50   179.00       12
+        ...
+    report: colmo-report experiment=pendulum sweep=3f2a...
+
+`variant` is what sets a job apart: its overrides less those every job shares. A job that
+wrote no summary (it failed or was killed) is a line saying so. The report line appears when
+the jobs were tracked in MLflow (`colmo.track`), naming the sweep by its id (`sweep_id`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Optional
+
+from hydra.experimental.callback import Callback
+from omegaconf import DictConfig, OmegaConf
+
+from colmo.store import SUMMARY_FILE
+
+
+def sweep_id(sweep_dir: Path) -> str:
+    """The id of the sweep writing into `sweep_dir` (absolute): the MLflow tag `colmo.sweep` of
+    its parent run, and a name `colmo-report sweep=` accepts."""
+    return hashlib.sha1(str(sweep_dir).encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class JobOutcome:
+    """What one job of a sweep wrote: its number, overrides, and summary (None if it wrote none)."""
+
+    number: int
+    overrides: tuple[str, ...]
+    summary: Optional[dict]
+    tracking: Optional[dict]  # the job's `tracker` config, if it was tracked in MLflow
+    task: str
+
+
+def read_jobs(sweep_dir: Path) -> list[JobOutcome]:
+    """The jobs Hydra ran into `sweep_dir`, in job order: every subdirectory with a `.hydra`
+    config (`hydra.job.num` from its `hydra.yaml`)."""
+    jobs = []
+    for hydra_dir in sweep_dir.glob("*/.hydra"):
+        job_dir = hydra_dir.parent
+        try:
+            hydra = OmegaConf.load(hydra_dir / "hydra.yaml").hydra
+            config = OmegaConf.load(hydra_dir / "config.yaml")
+            overrides = tuple(OmegaConf.load(hydra_dir / "overrides.yaml"))
+        except (OSError, ValueError, AttributeError):  # not a job of this sweep, or one cut off while starting
+            continue
+        summary_path = job_dir / SUMMARY_FILE
+        summary = json.loads(summary_path.read_text()) if summary_path.is_file() else None
+        tracker = config.get("tracker", {})
+        tracking = OmegaConf.to_container(tracker) if tracker.get("name") == "mlflow" else None
+        jobs.append(JobOutcome(int(hydra.job.num), overrides, summary, tracking, str(config.task.name)))
+    return sorted(jobs, key=lambda job: job.number)
+
+
+def _score(value: Optional[float]) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
+def comparison_lines(sweep_dir: Path, jobs: list[JobOutcome], shown_dir: Optional[Path] = None) -> list[str]:
+    """The comparison `CompareJobs` prints: a heading, one line per job, the report's command."""
+    shared = set.intersection(*(set(job.overrides) for job in jobs)) if jobs else set()
+    variants = [" ".join(o for o in job.overrides if o not in shared) or "(all alike)" for job in jobs]
+    width = max([len("variant"), *map(len, variants)])
+    lines = [f"sweep {shown_dir or sweep_dir}: {len(jobs)} job{'s' * (len(jobs) != 1)}"]
+    lines.append(f"  {'job':>3}  {'variant':<{width}}  {'best':>8}  {'held-out':>8}  {'samples':>7}")
+    for job, variant in zip(jobs, variants):
+        if job.summary is None:
+            lines.append(f"  {job.number:>3}  {variant:<{width}}  no summary: the job failed or was stopped")
+            continue
+        best, heldout = _score(job.summary.get("best_score")), _score(job.summary.get("best_heldout_score"))
+        lines.append(f"  {job.number:>3}  {variant:<{width}}  {best:>8}  {heldout:>8}  {job.summary.get('samples', 0):>7}")
+    tracked = [job for job in jobs if job.tracking is not None]
+    if tracked:
+        experiments = ",".join(dict.fromkeys(job.tracking.get("experiment") or job.task for job in tracked))
+        uri = tracked[0].tracking.get("tracking_uri")
+        lines.append(f"report: colmo-report experiment={experiments} sweep={sweep_id(sweep_dir)}" + (f" tracking_uri={uri}" if uri else ""))
+    return lines
+
+
+class CompareJobs(Callback):
+    """Prints `comparison_lines` of a sweep once all its jobs have ended."""
+
+    def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
+        shown = Path(config.hydra.sweep.dir)
+        sweep_dir = (Path(config.hydra.runtime.cwd) / shown).resolve()
+        print("\n".join(comparison_lines(sweep_dir, read_jobs(sweep_dir), shown)), flush=True)
