@@ -1,7 +1,8 @@
 """Progress a person can read while a search runs.
 
 On a terminal: a live display on stderr, redrawn twice a second from the search's counters, so
-it moves with every evaluation, not every batch: samples, evaluations and evaluations/s,
+it moves with every evaluation, not every batch: model calls (samples, duplicates and their
+regenerations included) and the programs evaluated of them, evaluations and evaluations/s,
 control steps, the best training score, generator and evaluator busy, and the time left
 against the limit that binds (samples, seconds, or a target score), from the first seconds on
 (the starter's calibration estimates the search until samples settle). Log lines print above it
@@ -37,9 +38,10 @@ log = logging.getLogger("colmo.search")
 class Snapshot:
     """The numbers a progress display shows, read from a running search."""
 
-    samples: int
+    samples: int  # model calls settled
     max_samples: int
-    in_flight: int
+    in_flight: int  # model calls whose samples are being evaluated
+    programs_evaluated: int  # new programs that were evaluated (not duplicates, not failures)
     evaluations: int
     steps: int
     elapsed: float
@@ -90,20 +92,23 @@ class Snapshot:
 
     def _counts(self) -> str:
         return (
-            f"samples {self.samples}/{self.max_samples} (+{self.in_flight} in flight) | "
-            f"evals {self.evaluations:,} ({self.evaluations_per_second:.1f}/s) | steps {self.steps:,}"
+            f"model calls {self.samples}/{self.max_samples} (+{self.in_flight} in flight) | "
+            f"programs evaluated {self.programs_evaluated:,} | evals {self.evaluations:,}"
         )
 
     def _scores(self) -> str:
-        return f"best {self._best()} | generator busy {self.generator_busy:.0%} | evaluators busy {self.evaluator_busy:.0%}"
+        return f"best {self._best()} | {self.evaluations_per_second:.1f} evals/s | steps {self.steps:,}"
+
+    def _busy(self) -> str:
+        return f"generator busy {self.generator_busy:.0%} | evaluators busy {self.evaluator_busy:.0%}"
 
     def line(self) -> str:
         """All the numbers on one line (the plain progress line)."""
-        return f"{self._counts()} | {self._scores()} | {self._left()}"
+        return f"{self._counts()} | {self._scores()} | {self._busy()} | {self._left()}"
 
-    def lines(self) -> tuple[str, str, str]:
-        """The numbers in three short lines (the live display, under 100 columns)."""
-        return f"{self.fraction_done():4.0%} | {self._left()}", self._counts(), self._scores()
+    def lines(self) -> tuple[str, str, str, str]:
+        """The numbers in four short lines (the live display, under 100 columns)."""
+        return f"{self.fraction_done():4.0%} | {self._left()}", self._counts(), self._scores(), self._busy()
 
 
 def duration(seconds: Optional[float]) -> str:
@@ -122,6 +127,7 @@ def snapshot(search: "Search") -> Snapshot:
     limits = search.cfg.search
     return Snapshot(
         samples=search.counters.samples, max_samples=limits.max_samples, in_flight=search.in_flight_samples,
+        programs_evaluated=search.counters.evaluated,
         evaluations=executor.evaluations_done, steps=executor.steps_done, elapsed=elapsed,
         best=search.database.best.score if search.database else None,
         generator_busy=generator_busy, evaluator_busy=evaluator_busy,
@@ -132,13 +138,13 @@ def snapshot(search: "Search") -> Snapshot:
 
 def render(state: Snapshot, width: int = 100) -> Table:
     """The live display: a bar of the binding limit with the time left beside it, and the
-    numbers in two lines under it (each under 100 columns; cut with an ellipsis on a narrower terminal)."""
-    head, counts, scores = state.lines()
+    numbers in three lines under it (each under 100 columns; cut with an ellipsis on a narrower terminal)."""
+    head, *numbers = state.lines()
     top = Table.grid(padding=(0, 1))
     top.add_row(ProgressBar(total=1.0, completed=state.fraction_done(), width=max(10, min(60, width - len(head) - 1))), head)
     table = Table.grid()
     table.add_column(no_wrap=True, overflow="ellipsis")
-    for row in (top, counts, scores):
+    for row in (top, *numbers):
         table.add_row(row)
     return table
 

@@ -25,7 +25,7 @@ from colmo.progress import Snapshot, progress, render
 
 def state(**fields) -> Snapshot:
     values = dict(
-        samples=40, max_samples=100, in_flight=4, evaluations=1234, steps=12_340_000, elapsed=120.0, best=512.345,
+        samples=40, max_samples=100, in_flight=4, programs_evaluated=12, evaluations=1234, steps=12_340_000, elapsed=120.0, best=512.345,
         generator_busy=0.25, evaluator_busy=0.93, max_seconds=0.0, stop_at_score=None,
     )
     return Snapshot(**(values | fields))
@@ -36,14 +36,15 @@ def test_rendered_display_snapshot():
     console.print(render(state(max_seconds=600.0, stop_at_score=900.0), console.width))
     assert console.export_text() == (
         "━━━━━━━━━━━━━━━━━━━━━━━━                                      40% | 3m00s left (max_samples)\n"
-        "samples 40/100 (+4 in flight) | evals 1,234 (10.3/s) | steps 12,340,000                     \n"
-        "best 512.3 (target 900) | generator busy 25% | evaluators busy 93%                          \n"
+        "model calls 40/100 (+4 in flight) | programs evaluated 12 | evals 1,234                     \n"
+        "best 512.3 (target 900) | 10.3 evals/s | steps 12,340,000                                   \n"
+        "generator busy 25% | evaluators busy 93%                                                    \n"
     )
 
 
 def test_every_line_of_the_display_fits_in_100_columns():
     big = state(
-        samples=123_456, max_samples=1_000_000, in_flight=64, evaluations=123_456_789, steps=98_765_432_100, elapsed=86_000.0,
+        samples=123_456, max_samples=1_000_000, in_flight=64, programs_evaluated=99_999, evaluations=123_456_789, steps=98_765_432_100, elapsed=86_000.0,
         best=-12345.678, max_seconds=90_000.0, stop_at_score=-100.0,
     )
     console = Console(file=io.StringIO(), record=True, width=100)
@@ -92,7 +93,7 @@ def fake_search(max_samples: int = 10, progress_every_s: float = 0.05) -> Simple
     executor = SimpleNamespace(busy_seconds=1.0, n_workers=2, evaluations_done=7, steps_done=70_000)
     limits = SimpleNamespace(max_samples=max_samples, max_seconds=0.0, stop_at_score=None, progress=True, progress_every_s=progress_every_s)
     return SimpleNamespace(
-        start=time.perf_counter(), end=float("inf"), estimated_seconds=None, executor=executor, counters=SimpleNamespace(samples=3),
+        start=time.perf_counter(), end=float("inf"), estimated_seconds=None, executor=executor, counters=SimpleNamespace(samples=3, evaluated=1),
         in_flight_samples=2, database=None, generation_seconds=0.5, cfg=SimpleNamespace(search=limits),
     )
 
@@ -103,7 +104,7 @@ def test_without_a_terminal_a_plain_line_every_few_seconds(caplog):
     with caplog.at_level(logging.INFO, logger="colmo.search"):
         with progress(search, console):
             deadline = time.monotonic() + 60
-            while sum("progress: samples 3/10 (+2 in flight) | evals 7" in m for m in caplog.messages) < 2 and time.monotonic() < deadline:
+            while sum("progress: model calls 3/10 (+2 in flight) | programs evaluated 1 | evals 7" in m for m in caplog.messages) < 2 and time.monotonic() < deadline:
                 time.sleep(0.05)
     lines = [m for m in caplog.messages if m.startswith("progress: ")]
     assert len(lines) >= 2, caplog.messages
@@ -209,8 +210,8 @@ def record_session(args: list[str], cwd, timeout: float = 600) -> str:
     return output.decode(errors="replace")
 
 
-DISPLAY = re.compile(r"samples (\d+)/\d+ \(\+\d+ in flight\) \| evals ([\d,]+) ")
-DISPLAY_PART = re.compile(r"in flight\) \| evals|evaluators busy \d+%|left \((max_samples|max_seconds|stop_at_score)\)|━")
+DISPLAY = re.compile(r"model calls (\d+)/\d+ \(\+\d+ in flight\) \| programs evaluated [\d,]+ \| evals ([\d,]+) ")
+DISPLAY_PART = re.compile(r"in flight\) \| programs evaluated|evaluators busy \d+%|left \((max_samples|max_seconds|stop_at_score)\)|━")
 LOG_LEVEL = re.compile(r"\b(INFO|WARNING|ERROR)\b")
 BATCH_LOG = re.compile(r"batch (\d+): samples")
 
@@ -226,7 +227,7 @@ def test_recorded_terminal_session(tmp_path):
 
     # (a) The display moves within a batch: before the first batch's log line, and between
     # two batches' log lines, the evaluations counter shown takes several increasing values
-    # while the samples counter stays.
+    # while the model calls counter stays.
     plain = re.sub(r"\x1b\[[0-9;]*m", "", session)  # colours off: rich's log handler colours numbers
     batch_logs = [m.start() for m in BATCH_LOG.finditer(plain)]
     assert [int(m.group(1)) for m in BATCH_LOG.finditer(plain)] == [0, 1, 2], plain[-3000:]
