@@ -25,7 +25,7 @@ What a search's run holds:
       mlflow.load_table("programs.json", run_ids=[...], extra_columns=["run_id"])
   (`MlflowClient(uri).load_table` also searches the *global* tracking URI: set it.)
 - at the end: best_policy.py, simplified_policy.py (when simplification made it), summary.json, the Hydra config files under `hydra/`, the
-  best-so-far plot `best_so_far.png`, and the best policy's plot and video on a held-out episode
+  best-so-far plot `best_so_far.png` (against model calls and against seconds, side by side), and the best policy's plot and video on a held-out episode
   under `best_policy/` (when `evaluation.render` made them); status FINISHED, KILLED (interrupted) or FAILED (the
   generator failed, or the process exited without finishing the search).
 
@@ -191,6 +191,7 @@ class MlflowTracker:
         self.table_written = -math.inf
         self.table_registered = False
         self.steps: list[int] = []
+        self.seconds: list[float] = []
         self.best: list[float] = []
         self.per_island: list[list[float]] = []
         # A search that dies before on_finish must not stay RUNNING in the UI forever.
@@ -204,6 +205,7 @@ class MlflowTracker:
         if time.monotonic() - self.table_written >= self.table_every_s:
             self._write_table()
         self.steps.append(report.samples)
+        self.seconds.append(report.seconds)
         self.best.append(report.best_score)
         self.per_island.append(list(report.best_per_island))
 
@@ -262,13 +264,16 @@ class MlflowTracker:
         self.table_written = time.monotonic()
 
     def _figure(self, task: str) -> Figure:
-        figure = Figure(figsize=(7, 4.5), layout="constrained")
-        ax = figure.subplots()
+        """Best so far against model calls and, beside it, against seconds of search: what a
+        sample buys and what a second buys (GFO spends seconds to make each sample count)."""
+        figure = Figure(figsize=(12, 4.5), layout="constrained")
         islands = [list(column) for column in zip(*self.per_island)]
-        draw_best_so_far(ax, self.steps, self.best, islands, "tab:blue", "best over all islands")
-        ax.set(title=f"{task}: best so far (dashed: per island)", xlabel="programs sampled", ylabel="score")
-        ax.grid(alpha=0.3)
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=3, frameon=False)  # below: never over the curves
+        for ax, x, label in zip(figure.subplots(1, 2), (self.steps, self.seconds), ("model calls", "seconds of search (wall clock)")):
+            draw_best_so_far(ax, x, self.best, islands, "tab:blue", "best over all islands")
+            ax.set(xlabel=label, ylabel="score")
+            ax.grid(alpha=0.3)
+            ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=3, frameon=False)  # below: never over the curves
+        figure.suptitle(f"{task}: best so far (dashed: per island)")
         return figure
 
 
