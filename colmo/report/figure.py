@@ -5,6 +5,8 @@ A curve of one point (a search that ended after its first batch) is drawn as a m
 
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
@@ -12,22 +14,23 @@ from matplotlib.figure import Figure
 from colmo.report.selection import AXES, Variant
 from colmo.report.tables import dims
 
-_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:cyan", "tab:olive", "tab:pink", "0.3")
+COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:cyan", "tab:olive", "tab:pink", "0.3")
 
 
-def _draw_variant(ax: Axes, variant: Variant, color: str) -> None:
-    """The variant's mean best-so-far over seeds (a step curve on the union of their x), the
-    band between its lowest and highest seed, and each seed thin; a single point as a marker."""
-    label = f"{variant.name} ({len(variant.runs)} seed{'s' if len(variant.runs) != 1 else ''})"
-    for run in variant.runs:
-        ax.plot(run.x, run.best, color=color, linewidth=0.8, alpha=0.5, drawstyle="steps-post", marker="o" if len(run.x) == 1 else None)
-    grid = np.unique(np.concatenate([np.asarray(run.x, dtype=float) for run in variant.runs]))
+def draw_seeds(ax: Axes, name: str, seeds: Sequence[tuple[Sequence[float], Sequence[float]]], color: str) -> None:
+    """One variant's best-so-far curves, `(x, best)` per seed: their mean (a step curve on the
+    union of their x), the band between the lowest and highest seed, and each seed thin; a
+    single point as a marker."""
+    label = f"{name} ({len(seeds)} seed{'s' if len(seeds) != 1 else ''})"
+    for x, best in seeds:
+        ax.plot(x, best, color=color, linewidth=0.8, alpha=0.5, drawstyle="steps-post", marker="o" if len(x) == 1 else None)
+    grid = np.unique(np.concatenate([np.asarray(x, dtype=float) for x, _ in seeds]))
     # Best so far is a step function: each seed's value at x is its last one at or before x
     # (undefined before its first batch, and held after its last).
-    values = np.full((len(variant.runs), len(grid)), np.nan)
-    for row, run in enumerate(variant.runs):
-        index = np.searchsorted(np.asarray(run.x, dtype=float), grid, side="right") - 1
-        values[row, index >= 0] = np.asarray(run.best)[index[index >= 0]]
+    values = np.full((len(seeds), len(grid)), np.nan)
+    for row, (x, best) in enumerate(seeds):
+        index = np.searchsorted(np.asarray(x, dtype=float), grid, side="right") - 1
+        values[row, index >= 0] = np.asarray(best)[index[index >= 0]]
     defined = ~np.isnan(values).all(axis=0)
     grid, values = grid[defined], values[:, defined]
     mean = np.nanmean(values, axis=0)
@@ -35,7 +38,7 @@ def _draw_variant(ax: Axes, variant: Variant, color: str) -> None:
         ax.plot(grid, mean, color=color, linestyle="none", marker="o", markersize=8, label=label)
     else:
         ax.plot(grid, mean, color=color, linewidth=2.2, drawstyle="steps-post", label=label)
-    if len(variant.runs) > 1:
+    if len(seeds) > 1:
         ax.fill_between(grid, np.nanmin(values, axis=0), np.nanmax(values, axis=0), color=color, alpha=0.18, step="post", linewidth=0)
 
 
@@ -45,7 +48,7 @@ def figure(tasks: dict[str, list[Variant]], axis: str = "samples") -> Figure:
     axes = fig.subplots(1, len(tasks), squeeze=False)[0]
     for ax, (task, variants) in zip(axes, tasks.items()):
         for index, variant in enumerate(variants):
-            _draw_variant(ax, variant, _COLORS[index % len(_COLORS)])
+            draw_seeds(ax, variant.name, [(run.x, run.best) for run in variant.runs], COLORS[index % len(COLORS)])
         first = variants[0].runs[0]
         if first.target is not None:
             ax.axhline(first.target, color="0.4", linestyle=":", linewidth=1.2, label=f"target {first.target:g}")

@@ -1,0 +1,264 @@
+"""Long language-model experiments: variants x seeds of `python -m colmo`, each run in a fixed
+directory of its own and resumable, and their report, read from those directories.
+
+    python scripts/llm_experiment.py run OUT --variant gfo=none --variant gfo=oneplusone --seeds 0 1 2 -- \\
+        task=pendulum llm=llamacpp llm.model_path=M.gguf search.max_samples=200
+    python scripts/llm_experiment.py report OUT [--out OUT/report.md]
+
+`run` starts the runs one after another, `OUT/<variant>/s<seed>` each: a run whose
+`summary.json` says it reached its limits is skipped, one that stopped before (killed, the
+machine restarted, Ctrl-C) is resumed (`resume=`), so the same command, run again, finishes
+what is left. Overrides after `--` apply to every run; a variant is one or more overrides
+(`--variant "gfo=oneplusone gfo.budget=50"`).
+
+`report` reads every `OUT/*/s*/summary.json` (and the run's `.hydra/config.yaml`) and writes
+Markdown beside a figure (`best_so_far.png`): per variant, best score so far against model
+calls (mean over seeds, band from the lowest to the highest seed, each seed thin); model calls
+to the task's `target_score`; final best and held-out score, mean ± std and per seed; programs
+evaluated, per 100 model calls, duplicate and valid-program rates; and, for two variants, a
+bootstrap interval of the difference of their mean final bests (seeds resampled with
+replacement within each variant; with 3 seeds a variant it is coarse, and it says so).
+Runs still going, or stopped, are listed and left out of the figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import shlex
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional, Sequence
+
+import numpy as np
+import yaml
+from matplotlib.figure import Figure
+
+from colmo.record import FINISHED
+from colmo.report.figure import COLORS, draw_seeds
+from colmo.report.tables import mean_std
+from colmo.store import SUMMARY_FILE
+
+REPORT_FILE = "report.md"
+PLOT_FILE = "best_so_far.png"
+BOOTSTRAP_DRAWS = 10_000
+
+
+def variant_dir(variant: str) -> str:
+    """A directory name for a variant's overrides: `gfo=none` -> `gfo=none`, spaces -> `,`."""
+    return re.sub(r"[^\w.=+,-]+", "_", ",".join(variant.split()))
+
+
+def summary_of(run_dir: Path) -> Optional[dict]:
+    try:
+        return json.loads((run_dir / SUMMARY_FILE).read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def run_all(out: Path, variants: Sequence[str], seeds: Sequence[int], overrides: Sequence[str]) -> int:
+    """Each (variant, seed) run in turn, skipping finished ones and resuming stopped ones; the
+    exit status of the first run that fails, else 0."""
+    for variant in variants:
+        for seed in seeds:
+            run_dir = out / variant_dir(variant) / f"s{seed}"
+            summary = summary_of(run_dir)
+            if summary is not None and summary["stop_reason"] in FINISHED:
+                print(f"{run_dir}: finished ({summary['stop_reason']}), skipped", flush=True)
+                continue
+            resume = [f"resume={run_dir}"] if (run_dir / "programs.db").is_file() else []
+            command = [
+                sys.executable, "-m", "colmo", *overrides, *variant.split(), f"seed={seed}", f"hydra.run.dir={run_dir}", *resume,
+            ]
+            print(("resuming " if resume else "starting ") + shlex.join(command), flush=True)
+            status = subprocess.call(command)
+            if status != 0:
+                print(f"{run_dir}: exit status {status}; run the same command again to resume it", file=sys.stderr)
+                return status
+    return 0
+
+
+@dataclass
+class Run:
+    variant: str
+    seed: int
+    summary: dict
+    target: Optional[float]
+
+    @property
+    def calls(self) -> int:
+        return self.summary["samples"]
+
+    @property
+    def evaluated(self) -> int:
+        return self.summary["programs_evaluated"]
+
+    @property
+    def duplicate_answers(self) -> int:
+        return round(self.summary["duplicate_rate"] * self.calls)
+
+    @property
+    def failed(self) -> int:
+        return self.summary["failures"] + self.summary["unusable_outputs"]
+
+    @property
+    def per_100_calls(self) -> float:
+        return 100 * self.evaluated / self.calls if self.calls else 0.0
+
+    @property
+    def best(self) -> float:
+        return self.summary["best_score"]
+
+    @property
+    def heldout(self) -> Optional[float]:
+        return self.summary["best_heldout_score"]
+
+    @property
+    def curve(self) -> tuple[list[float], list[float]]:
+        """Best score so far against model calls, held to the last call."""
+        points = [tuple(point) for point in self.summary["best_so_far"]]
+        x, best = [float(calls) for calls, _ in points], [score for _, score in points]
+        if x[-1] < self.calls:
+            x, best = [*x, float(self.calls)], [*best, best[-1]]
+        return x, best
+
+    @property
+    def calls_to_target(self) -> Optional[int]:
+        if self.target is None:
+            return None
+        return next((int(calls) for calls, score in self.summary["best_so_far"] if score >= self.target), None)
+
+
+def read_runs(out: Path) -> tuple[dict[str, list[Run]], list[str]]:
+    """The finished runs under `out` by variant directory, in seed order, and a line for each
+    run that has not finished."""
+    variants: dict[str, list[Run]] = {}
+    unfinished = []
+    for run_dir in sorted(out.glob("*/s*"), key=lambda d: (d.parent.name, int(d.name[1:]) if d.name[1:].isdigit() else 0)):
+        summary = summary_of(run_dir)
+        if summary is None or summary["stop_reason"] not in FINISHED:
+            unfinished.append(f"- `{run_dir}`: " + (f"stopped ({summary['stop_reason']})" if summary else "no summary yet (running, or killed)"))
+            continue
+        config = yaml.safe_load((run_dir / ".hydra" / "config.yaml").read_text())
+        target = config.get("task", {}).get("target_score")
+        seed = int(config["seed"])
+        variants.setdefault(run_dir.parent.name, []).append(Run(run_dir.parent.name, seed, summary, target))
+    return variants, unfinished
+
+
+def bootstrap_difference(first: Sequence[float], second: Sequence[float], draws: int = BOOTSTRAP_DRAWS, seed: int = 0) -> tuple[float, float, float]:
+    """The difference of means `second - first` and its 95% percentile bootstrap interval
+    (seeds resampled with replacement within each group)."""
+    rng = np.random.default_rng(seed)
+    a, b = np.asarray(first, dtype=float), np.asarray(second, dtype=float)
+    resampled = rng.choice(b, (draws, len(b))).mean(axis=1) - rng.choice(a, (draws, len(a))).mean(axis=1)
+    low, high = np.percentile(resampled, [2.5, 97.5])
+    return float(b.mean() - a.mean()), float(low), float(high)
+
+
+def _cell(values: Sequence[Optional[float]], digits: int = 1) -> str:
+    present = [v for v in values if v is not None]
+    if not present:
+        return "—"
+    return mean_std(present, digits) + ("" if len(present) == len(values) else f" ({len(present)}/{len(values)} seeds)")
+
+
+def report_lines(variants: dict[str, list[Run]], unfinished: list[str], command: str) -> list[str]:
+    lines = [
+        "# Language-model experiment", "", f"Made with `{command}` from each run's `summary.json`.", "",
+        "Model calls count every answer of the model (duplicates thrown away and generated again included);",
+        "programs evaluated: new programs that were scored (not duplicates, not failures). Mean ± sample std over seeds.",
+        "", "## Per variant", "",
+        "| Variant | Seeds | Model calls | Programs evaluated | per 100 calls | Duplicate answers | Valid programs | Best | Held-out | Calls to target |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, runs in variants.items():
+        target = runs[0].target
+        reached = [r.calls_to_target for r in runs if r.calls_to_target is not None]
+        if target is None:
+            to_target = "—"
+        else:
+            to_target = f"{mean_std(reached, 0)} ({len(reached)}/{len(runs)} seeds)" if reached else f"not reached (0/{len(runs)} seeds)"
+        lines.append(
+            f"| {name} | {len(runs)} | {_cell([r.calls for r in runs], 0)} | {_cell([r.evaluated for r in runs], 1)} | "
+            f"{_cell([r.per_100_calls for r in runs])} | {_cell([100 * r.summary['duplicate_rate'] for r in runs])}% | "
+            f"{_cell([100 * r.summary['valid_program_rate'] for r in runs])}% | {_cell([r.best for r in runs])} | "
+            f"{_cell([r.heldout for r in runs])} | {to_target} |"
+        )
+    lines += [
+        "", "## Per run", "",
+        "| Variant | Seed | Model calls | Programs evaluated | Duplicate answers | Failed or unusable | Evaluated per 100 calls "
+        "| Best | Held-out | Calls to target | Seconds |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, runs in variants.items():
+        for r in runs:
+            heldout = "—" if r.heldout is None else f"{r.heldout:.1f}"
+            lines.append(
+                f"| {name} | {r.seed} | {r.calls} | {r.evaluated} | {r.duplicate_answers} | {r.failed} | {r.per_100_calls:.1f} | "
+                f"{r.best:.1f} | {heldout} | {r.calls_to_target if r.calls_to_target is not None else '—'} | {r.summary['seconds']:.0f} |"
+            )
+    names = list(variants)
+    if len(names) == 2:
+        first, second = (variants[name] for name in names)
+        difference, low, high = bootstrap_difference([r.best for r in first], [r.best for r in second])
+        coarse = " (coarse: few seeds a variant)" if min(len(first), len(second)) < 5 else ""
+        verdict = "excludes 0" if low > 0 or high < 0 else "includes 0: no significant difference at this number of seeds"
+        lines += [
+            "", "## Difference of final bests", "",
+            f"{names[1]} − {names[0]}: {difference:+.1f}, 95% bootstrap interval [{low:+.1f}, {high:+.1f}] "
+            f"({BOOTSTRAP_DRAWS:,} resamples of the seeds within each variant){coarse}; the interval {verdict}.",
+        ]
+    lines += ["", "## Best so far", "", f"![best so far against model calls]({PLOT_FILE})", ""]
+    if unfinished:
+        lines += ["## Not counted (not finished)", "", *unfinished, ""]
+    return lines
+
+
+def best_so_far_figure(variants: dict[str, list[Run]]) -> Figure:
+    figure = Figure(figsize=(7, 4.8), layout="constrained")
+    ax = figure.subplots()
+    for index, (name, runs) in enumerate(variants.items()):
+        draw_seeds(ax, name, [r.curve for r in runs], COLORS[index % len(COLORS)])
+    target = next(iter(variants.values()))[0].target
+    if target is not None:
+        ax.axhline(target, color="0.4", linestyle=":", linewidth=1.2, label=f"target {target:g}")
+    ax.set(xlabel="model calls", ylabel="best score so far")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=2, frameon=False)
+    return figure
+
+
+def write_report(out: Path, report: Path, command: str) -> Path:
+    variants, unfinished = read_runs(out)
+    if not variants:
+        raise SystemExit(f"llm_experiment: error: no finished run under {out}")
+    report.parent.mkdir(parents=True, exist_ok=True)
+    best_so_far_figure(variants).savefig(report.parent / PLOT_FILE, dpi=130)
+    report.write_text("\n".join(report_lines(variants, unfinished, command)).rstrip() + "\n")
+    return report
+
+
+def main(argv: Optional[Sequence[str]] = None) -> None:
+    parser = argparse.ArgumentParser(prog="scripts/llm_experiment.py", description=__doc__.split("\n\n")[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("run", help="run (or resume) every (variant, seed) into OUT/<variant>/s<seed>")
+    run.add_argument("out", type=Path)
+    run.add_argument("--variant", action="append", required=True, help="overrides of one variant, e.g. gfo=none (repeat)")
+    run.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    run.add_argument("overrides", nargs="*", help="after --: overrides for every run")
+    report = commands.add_parser("report", help="report.md and best_so_far.png from the runs under OUT")
+    report.add_argument("out", type=Path)
+    report.add_argument("--out", dest="report", type=Path, help="the Markdown file (default OUT/report.md)")
+    args = parser.parse_args(argv)
+    if args.command == "run":
+        sys.exit(run_all(args.out, args.variant, args.seeds, args.overrides))
+    command = "python scripts/llm_experiment.py " + shlex.join(sys.argv[1:] if argv is None else list(argv))
+    print(write_report(args.out, args.report or args.out / REPORT_FILE, command))
+
+
+if __name__ == "__main__":
+    main()
