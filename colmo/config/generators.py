@@ -9,7 +9,7 @@ from typing import Any, Optional
 
 from omegaconf import MISSING
 
-from colmo.config.fields import above, at_least, option, require
+from colmo.config.fields import above, at_least, check_component, component, option, require
 
 PROMPT_FORMATS = ("chat", "completion")
 
@@ -18,10 +18,11 @@ PROMPT_FORMATS = ("chat", "completion")
 class GeneratorConfig:
     """Fields every program generator (config group `llm`) has."""
 
-    name: str = option(MISSING, "mutate, openai, vllm or llamacpp")
+    name: str = component(MISSING, "the generator the llm option runs", "colmo.generate:GENERATORS")
     batch_size: int = option(4, "programs generated from each prompt")
 
     def __post_init__(self) -> None:
+        check_component(self, "name")
         at_least(self, "llm", batch_size=1)
 
 

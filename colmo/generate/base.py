@@ -10,9 +10,11 @@ import importlib
 import logging
 import random
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, ClassVar, Optional, Sequence, TypeVar
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, Optional, Sequence
 
+from colmo.config import GeneratorConfig
 from colmo.errors import one_line
+from colmo.registry import Registry
 
 if TYPE_CHECKING:
     from colmo.prompt import Prompt
@@ -50,9 +52,11 @@ Probe = Callable[[str], bool]
 
 
 class Generator(abc.ABC):
-    """Turns prompts into raw texts. Subclasses register under their `llm.name` with `@register`
-    and are built as `cls(cfg, seed, probe)`; `probe` is None unless `wants_probe`."""
+    """Turns prompts into raw texts. Subclasses register under their `llm.name` with
+    `@GENERATORS.register` and are built as `cls(cfg, seed, probe)`; `probe` is None unless
+    `wants_probe`."""
 
+    options: ClassVar[type[GeneratorConfig]]  # the schema of its `llm` option
     wants_probe: ClassVar[bool] = False
 
     def __init__(self, cfg, seed: int, probe: Optional[Probe] = None) -> None:
@@ -86,18 +90,7 @@ def import_library(module: str, package: str, llm: str) -> Any:
         raise GeneratorError(f"llm={llm} needs {package}: pip install 'colmo[{llm}]'") from None
 
 
-GENERATORS: dict[str, type[Generator]] = {}
-G = TypeVar("G", bound=type[Generator])
-
-
-def register(name: str) -> Callable[[G], G]:
-    """Class decorator: make a generator available as `llm=<name>`."""
-
-    def add(cls: G) -> G:
-        GENERATORS[name] = cls
-        return cls
-
-    return add
+GENERATORS: Registry[type[Generator]] = Registry("llm.name")
 
 
 def batch_of(

@@ -22,13 +22,15 @@ from typing import Any, Optional
 import numpy as np
 
 from colmo.config import LlamaCppConfig
-from colmo.generate.base import Generation, Generator, GeneratorError, Probe, describe_error, import_library, logger, register
+from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, describe_error, import_library, logger
 from colmo.prompt import COMPLETION_STOP, Prompt
 
 
-@register("llamacpp")
+@GENERATORS.register("llamacpp")
 class LlamaCppGenerator(Generator):
     """A `llama_cpp.Llama` in this process; the batch is `n` completions sampled in turn."""
+
+    options = LlamaCppConfig
 
     def __init__(self, cfg: LlamaCppConfig, seed: int, probe: Optional[Probe] = None):
         super().__init__(cfg, seed, probe)

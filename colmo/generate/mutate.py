@@ -42,7 +42,7 @@ from typing import Optional
 import numpy as np
 
 from colmo.config import MutateConfig
-from colmo.generate.base import Generation, Generator, GeneratorError, Probe, logger, register
+from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, logger
 from colmo.generate.operators import CROSSOVERS, MUTATIONS, Pieces, policy_function
 from colmo.program import ProgramError, instantiate, parametrize
 from colmo.prompt import Prompt
@@ -62,10 +62,11 @@ class _Parent:
             self.tree.body.insert(0, ast.parse("import numpy as np").body[0])  # for the new terms' np.*
 
 
-@register("mutate")
+@GENERATORS.register("mutate")
 class MutateGenerator(Generator):
     """The embedded baseline: genetic programming on the prompt's programs (module docstring)."""
 
+    options = MutateConfig
     wants_probe = True
 
     def __init__(self, cfg: MutateConfig, seed: int, probe: Optional[Probe] = None):

@@ -34,7 +34,7 @@ import openai
 
 from colmo.config import OpenAIConfig
 from colmo.errors import one_line
-from colmo.generate.base import Generation, Generator, GeneratorError, Probe, batch_of, describe_error, logger, register
+from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, batch_of, describe_error, logger
 from colmo.prompt import COMPLETION_STOP, Prompt
 
 _CHECK_TIMEOUT_S = 5.0
@@ -71,10 +71,12 @@ class _Server:
         self.in_flight = 0
 
 
-@register("openai")
+@GENERATORS.register("openai")
 class OpenAIGenerator(Generator):
     """Completions from OpenAI-compatible servers, with per-server concurrency limits, our own
     retries and failover."""
+
+    options = OpenAIConfig
 
     def __init__(self, cfg: OpenAIConfig, seed: int, probe: Optional[Probe] = None):
         super().__init__(cfg, seed, probe)

@@ -12,13 +12,15 @@ import time
 from typing import Optional
 
 from colmo.config import VLLMConfig
-from colmo.generate.base import Generation, Generator, GeneratorError, Probe, batch_of, describe_error, import_library, logger, register
+from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, batch_of, describe_error, import_library, logger
 from colmo.prompt import COMPLETION_STOP, Prompt
 
 
-@register("vllm")
+@GENERATORS.register("vllm")
 class VLLMGenerator(Generator):
     """`vllm.LLM` in this process; the batch is the `n` outputs of one request."""
+
+    options = VLLMConfig
 
     def __init__(self, cfg: VLLMConfig, seed: int, probe: Optional[Probe] = None):
         super().__init__(cfg, seed, probe)
