@@ -249,14 +249,16 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
     run.add_argument("out", type=Path)
     run.add_argument("--variant", action="append", required=True, help="overrides of one variant, e.g. gfo=none (repeat)")
     run.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
-    run.add_argument("overrides", nargs="*", help="after --: overrides for every run")
     report = commands.add_parser("report", help="report.md and best_so_far.png from the runs under OUT")
     report.add_argument("out", type=Path)
     report.add_argument("--out", dest="report", type=Path, help="the Markdown file (default OUT/report.md)")
-    args = parser.parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    # The overrides after `--`, split off here: argparse's subcommands do not take `--` well.
+    ours, overrides = (argv[: argv.index("--")], argv[argv.index("--") + 1 :]) if "--" in argv else (argv, [])
+    args = parser.parse_args(ours)
     if args.command == "run":
-        sys.exit(run_all(args.out, args.variant, args.seeds, args.overrides))
-    command = "python scripts/llm_experiment.py " + shlex.join(sys.argv[1:] if argv is None else list(argv))
+        sys.exit(run_all(args.out, args.variant, args.seeds, overrides))
+    command = "python scripts/llm_experiment.py " + shlex.join(argv)
     print(write_report(args.out, args.report or args.out / REPORT_FILE, command))
 
 
