@@ -1,0 +1,63 @@
+"""The run directory's files are private (issue 24 part 7): the store holds programs' failure
+messages and the run's settings, so `programs.db` and SQLite's -wal and -shm files beside it
+are created 0600 and a run directory colmo creates is 0700, whatever the umask lets through."""
+
+from __future__ import annotations
+
+import os
+import stat
+from pathlib import Path
+
+import pytest
+
+from colmo.record import SampleRecord
+from colmo.store import STORE_FILE, open_run
+
+SETTINGS = {"task": "pendulum"}
+
+
+def mode(path: Path) -> int:
+    return stat.S_IMODE(path.stat().st_mode)
+
+
+@pytest.fixture
+def permissive_umask():
+    """The most permissive umask: every bit a file or directory is created without is colmo's choice."""
+    previous = os.umask(0)
+    try:
+        yield
+    finally:
+        os.umask(previous)
+
+
+def write_a_sample(run_dir: Path, resume: bool, sample: int) -> None:
+    store, lock = open_run(run_dir, SETTINGS, resume=resume)
+    try:
+        store.add(SampleRecord(sample=sample, batch=sample, status="duplicate", island=0, parent_keys=(), generator="test", raw="x"))
+        store_files = sorted(path.name for path in run_dir.iterdir() if path.name.startswith(STORE_FILE))
+        assert store_files == [STORE_FILE, f"{STORE_FILE}-shm", f"{STORE_FILE}-wal"]  # open, in WAL mode
+        assert {name: mode(run_dir / name) for name in store_files} == dict.fromkeys(store_files, 0o600)
+    finally:
+        store.close()
+        lock.release()
+
+
+def test_a_new_run_directory_and_its_store_are_private(tmp_path, permissive_umask):
+    run_dir = tmp_path / "runs" / "first"
+    write_a_sample(run_dir, resume=False, sample=0)
+    assert mode(run_dir) == 0o700
+    assert mode(run_dir / STORE_FILE) == 0o600
+
+
+def test_a_resumed_run_keeps_its_store_private(tmp_path, permissive_umask):
+    run_dir = tmp_path / "run"
+    write_a_sample(run_dir, resume=False, sample=0)
+    write_a_sample(run_dir, resume=True, sample=1)  # -wal and -shm made anew, with the store's mode
+    assert mode(run_dir) == 0o700 and mode(run_dir / STORE_FILE) == 0o600
+
+
+def test_a_store_in_a_directory_the_user_made_is_private(tmp_path, permissive_umask):
+    run_dir = tmp_path / "mine"
+    run_dir.mkdir(mode=0o755)
+    write_a_sample(run_dir, resume=False, sample=0)
+    assert mode(run_dir) == 0o755  # the user's own directory keeps the mode the user gave it
