@@ -16,7 +16,6 @@ import contextlib
 import logging
 import math
 import threading
-import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Iterator, Optional
 
@@ -25,8 +24,6 @@ from rich.live import Live
 from rich.logging import RichHandler
 from rich.progress_bar import ProgressBar
 from rich.table import Table
-
-from colmo.record import busy_fractions
 
 if TYPE_CHECKING:
     from colmo.search import Search
@@ -121,18 +118,16 @@ def duration(seconds: Optional[float]) -> str:
 
 def snapshot(search: "Search") -> Snapshot:
     """What `search` has done so far."""
-    elapsed = time.perf_counter() - search.start
-    executor = search.executor
-    generator_busy, evaluator_busy = busy_fractions(search.generation_seconds, executor.busy_seconds, executor.n_workers, elapsed)
-    limits = search.cfg.search
+    totals, executor, limits = search.totals(), search.executor, search.cfg.search
     return Snapshot(
-        samples=search.counters.samples, max_samples=limits.max_samples, in_flight=search.in_flight_samples,
-        programs_evaluated=search.counters.evaluated,
-        evaluations=executor.evaluations_done, steps=executor.steps_done, elapsed=elapsed,
+        samples=totals.samples, max_samples=limits.max_samples, in_flight=search.in_flight_samples,
+        programs_evaluated=totals.programs_evaluated,
+        # The executor's counts move with every evaluation; the totals' with every integrated batch.
+        evaluations=executor.evaluations_done, steps=executor.steps_done, elapsed=totals.seconds,
         best=search.database.best.score if search.database else None,
-        generator_busy=generator_busy, evaluator_busy=evaluator_busy,
-        max_seconds=search.end - search.start if math.isfinite(search.end) else 0.0, stop_at_score=limits.stop_at_score,
-        estimated_seconds=search.estimated_seconds,
+        generator_busy=totals.generator_busy, evaluator_busy=totals.evaluator_busy,
+        max_seconds=search.budget.limit_seconds, stop_at_score=limits.stop_at_score,
+        estimated_seconds=search.budget.estimated_seconds,
     )
 
 

@@ -13,9 +13,10 @@ A sample's status is one of:
 
 from __future__ import annotations
 
+import collections
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Optional, Protocol
 
 if TYPE_CHECKING:
@@ -83,11 +84,10 @@ class SampleRecord:
 
     @classmethod
     def of(
-        cls, sample: Sample, status: str, program: Optional["ParametricProgram"] = None,
-        result: Optional["ProgramResult"] = None, failure: Optional[str] = None,
+        cls, sample: Sample, status: str, program: Optional["ParametricProgram"] = None, failure: Optional[str] = None,
     ) -> "SampleRecord":
-        """The record of `sample` with its outcome: the program it holds (if one could be read)
-        and its evaluation (if it ran)."""
+        """The record of `sample` settled as `status` before or without an evaluation, with the
+        program it holds if one could be read."""
         generation = sample.generation
         fields: dict[str, Any] = dict(
             sample=sample.index, batch=sample.batch, status=status, island=sample.island, parent_keys=tuple(sample.parent_keys),
@@ -97,32 +97,27 @@ class SampleRecord:
         )
         if program is not None:
             fields.update(key=program.key, skeleton=program.skeleton, initial_params=tuple(program.values), n_params=program.n_params)
-        if result is not None:
-            size = result.size
-            fields.update(
-                status=FAILED if result.failure else EVALUATED, failure=result.failure, code=result.code,
-                params=tuple(result.params), initial_score=finite_or_none(result.initial.score), score=finite_or_none(result.score),
-                returns=tuple(result.evaluation.returns), evaluations=result.evaluations, steps=result.steps,
-                raced_out=result.raced_out, cut_short=result.cut_short, evaluation_seconds=result.seconds,
-                lines=size.lines, nodes=size.nodes,
-            )
         return cls(**fields)
+
+    @classmethod
+    def of_result(cls, sample: Sample, program: "ParametricProgram", result: "ProgramResult") -> "SampleRecord":
+        """The record of `sample` whose `program` ran: `evaluated`, or `failed` if `result` says so."""
+        settled = cls.of(sample, FAILED if result.failure else EVALUATED, program, result.failure)
+        return replace(
+            settled, code=result.code, params=tuple(result.params), initial_score=finite_or_none(result.initial.score),
+            score=finite_or_none(result.score), returns=tuple(result.evaluation.returns), evaluations=result.evaluations,
+            steps=result.steps, raced_out=result.raced_out, cut_short=result.cut_short, evaluation_seconds=result.seconds,
+            lines=result.size.lines, nodes=result.size.nodes,
+        )
 
     def as_row(self) -> dict[str, Any]:
         return asdict(self)
 
 
-def busy_fractions(generation_seconds: float, evaluation_seconds: float, workers: int, wall: float) -> tuple[float, float]:
-    """How busy the generator and the evaluation workers were: fractions of the wall time (the
-    workers' together)."""
-    if not wall:
-        return 0.0, 0.0
-    return generation_seconds / wall, evaluation_seconds / (wall * workers)
-
-
 @dataclass(frozen=True)
 class Totals:
-    """What a search has done so far, as both reports say it."""
+    """What a search has done so far, as every report says it: the progress display, each
+    `BatchReport` (what trackers log) and the `Summary` (made by `Counters.totals`, only there)."""
 
     samples: int  # model calls: each answer, the regenerated duplicates included
     programs_evaluated: int
@@ -174,6 +169,7 @@ class Summary(Totals):
     heldout: tuple[dict, ...] = ()  # the top programs' training and held-out scores
     media: dict = field(default_factory=dict)  # the best policy's plot and video, relative to run_dir
     simplified: dict = field(default_factory=dict)  # the best policy simplified: scores, sizes, code
+    robustness: dict = field(default_factory=dict)  # the best policy under model mismatch: headline scores, files in run_dir
 
     @property
     def resumable(self) -> bool:
@@ -187,60 +183,53 @@ class Summary(Totals):
 
 @dataclass
 class Counters:
-    """Running totals over the samples integrated so far; `samples` counts model calls, `records`
-    the stored samples (one per answer kept)."""
+    """Running sums over the samples integrated so far, from which `totals` makes the numbers
+    of every report."""
 
-    samples: int = 0
-    records: int = 0
-    duplicate_answers: int = 0
-    evaluated: int = 0
-    duplicates: int = 0
-    failures: int = 0
-    unusable: int = 0
-    interrupted: int = 0
+    samples: int = 0  # model calls
+    records: int = 0  # stored samples, one per answer kept
+    duplicate_answers: int = 0  # model calls whose answer was a duplicate
+    by_status: collections.Counter = field(default_factory=collections.Counter)  # records by status
     evaluations: int = 0
     steps: int = 0
     completion_tokens: int = 0
-    generation_seconds: float = 0.0
+    generation_seconds: float = 0.0  # the stored samples' own generation time (for tokens/s)
 
     def count(self, record: SampleRecord) -> None:
         self.samples += record.model_calls
         self.records += 1
         self.duplicate_answers += record.model_calls - 1 + (record.status == DUPLICATE)
-        field_name = {EVALUATED: "evaluated", FAILED: "failures", DUPLICATE: "duplicates", UNUSABLE: "unusable", INTERRUPTED: "interrupted"}[record.status]
-        setattr(self, field_name, getattr(self, field_name) + 1)
+        self.by_status[record.status] += 1
         self.evaluations += record.evaluations
         self.steps += record.steps
         self.completion_tokens += record.completion_tokens
         self.generation_seconds += record.generation_seconds
 
-    @property
-    def valid_program_rate(self) -> float:
-        """The share of new programs (duplicates and interrupted samples aside) that could be
-        read, passed the static check and ran."""
-        judged = self.records - self.duplicates - self.interrupted
-        return self.evaluated / judged if judged else 0.0
-
-    @property
-    def duplicate_rate(self) -> float:
-        return self.duplicate_answers / self.samples if self.samples else 0.0
-
-    @property
-    def tokens_per_second(self) -> float:
-        """Completion tokens per second of generation (0 for generators without tokens)."""
-        return self.completion_tokens / self.generation_seconds if self.generation_seconds else 0.0
-
-    def totals(self) -> dict[str, Any]:
-        """The fields reports share, under their report names."""
-        return dict(
-            samples=self.samples, programs_evaluated=self.evaluated, duplicates_skipped=self.duplicates, failures=self.failures,
-            unusable_outputs=self.unusable, interrupted=self.interrupted, evaluations=self.evaluations, steps=self.steps,
-            valid_program_rate=self.valid_program_rate, duplicate_rate=self.duplicate_rate, tokens_per_second=self.tokens_per_second,
+    def totals(self, seconds: float, generator_seconds: float, evaluator_seconds: float, workers: int) -> Totals:
+        """The reports' numbers after `seconds` of wall time, of which the generator was busy
+        `generator_seconds` and the `workers` evaluation workers `evaluator_seconds` together.
+        The valid program rate is the share of new programs (duplicates and interrupted samples
+        aside) that could be read, passed the static check and ran."""
+        status = self.by_status
+        judged = self.records - status[DUPLICATE] - status[INTERRUPTED]
+        return Totals(
+            samples=self.samples, programs_evaluated=status[EVALUATED], duplicates_skipped=status[DUPLICATE], failures=status[FAILED],
+            unusable_outputs=status[UNUSABLE], interrupted=status[INTERRUPTED], evaluations=self.evaluations, steps=self.steps,
+            valid_program_rate=_ratio(status[EVALUATED], judged), duplicate_rate=_ratio(self.duplicate_answers, self.samples),
+            tokens_per_second=_ratio(self.completion_tokens, self.generation_seconds),
+            evaluations_per_second=_ratio(self.evaluations, seconds), generator_busy=_ratio(generator_seconds, seconds),
+            evaluator_busy=_ratio(evaluator_seconds, seconds * workers), seconds=seconds,
         )
 
 
+def _ratio(part: float, whole: float) -> float:
+    return part / whole if whole else 0.0
+
+
 class SearchObserver(Protocol):
-    """Receives a search's reports (a tracker, a progress display)."""
+    """Receives a search's reports after each batch and at the end: a tracker's observers
+    (`colmo.trackers`). The progress display is no observer: it reads `Search.totals` on its
+    own clock, between batches too."""
 
     def on_batch(self, report: BatchReport, records: list[SampleRecord]) -> None: ...
 

@@ -4,6 +4,7 @@ pseudo-terminal: the display moves within a batch, and log lines print whole, ab
 
 from __future__ import annotations
 
+import collections
 import fcntl
 import io
 import logging
@@ -21,6 +22,7 @@ import pytest
 from rich.console import Console
 
 from colmo.progress import Snapshot, progress, render
+from colmo.record import DUPLICATE, EVALUATED, Counters
 
 
 def state(**fields) -> Snapshot:
@@ -90,11 +92,13 @@ def test_unknown_time_left_reads_as_a_question_mark():
 
 def fake_search(max_samples: int = 10, progress_every_s: float = 0.05) -> SimpleNamespace:
     """What `colmo.progress.snapshot` reads from a search (no search runs)."""
-    executor = SimpleNamespace(busy_seconds=1.0, n_workers=2, evaluations_done=7, steps_done=70_000)
+    executor = SimpleNamespace(evaluations_done=7, steps_done=70_000)
     limits = SimpleNamespace(max_samples=max_samples, max_seconds=0.0, stop_at_score=None, progress=True, progress_every_s=progress_every_s)
+    # 3 model calls, one program evaluated; in 10 s the generator was busy 0.5 s, the 2 workers 1 s together.
+    counters = Counters(samples=3, records=3, by_status=collections.Counter({EVALUATED: 1, DUPLICATE: 2}))
     return SimpleNamespace(
-        start=time.perf_counter(), end=float("inf"), estimated_seconds=None, executor=executor, counters=SimpleNamespace(samples=3, evaluated=1),
-        in_flight_samples=2, database=None, generation_seconds=0.5, cfg=SimpleNamespace(search=limits),
+        totals=lambda: counters.totals(10.0, 0.5, 1.0, 2), budget=SimpleNamespace(limit_seconds=0.0, estimated_seconds=None),
+        executor=executor, in_flight_samples=2, database=None, cfg=SimpleNamespace(search=limits),
     )
 
 
@@ -108,7 +112,7 @@ def test_without_a_terminal_a_plain_line_every_few_seconds(caplog):
                 time.sleep(0.05)
     lines = [m for m in caplog.messages if m.startswith("progress: ")]
     assert len(lines) >= 2, caplog.messages
-    assert "steps 70,000" in lines[0] and "best —" in lines[0]
+    assert "steps 70,000" in lines[0] and "best —" in lines[0] and "generator busy 5% | evaluators busy 5%" in lines[0]
     assert console.file.getvalue() == ""  # no live display
 
 

@@ -1,0 +1,159 @@
+"""A search's time: the limit `search.max_seconds`, counted from the start of the process
+(imports and Hydra included); the search's own deadline, early enough to leave the programs in
+flight their final scores and the finish its held-out scores, simplification and video
+(`colmo.finish.plan_finish`, from the starter's calibration); and the run's estimated
+duration, said in one line before the first batch with the limit that binds.
+
+The calibration is a few seconds of a machine whose load changes: while the search runs, the
+workers' recent seconds per evaluation against the calibration's (`load_factor`, at least 1)
+scale what the programs in flight and the finish will cost, and the deadline moves with them
+(a run on 2 cores shared with other jobs measured evaluations 2-4 times slower than its
+calibration a minute earlier).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import threading
+import time
+from collections import deque
+from pathlib import Path
+from typing import Optional
+
+from colmo.config import SearchConfig
+from colmo.evaluation import Executor
+from colmo.finish import FINISH_SHARE, SAFETY, FinishPlan, plan_finish
+from colmo.progress import duration
+
+log = logging.getLogger("colmo.search")
+
+# The finish ends this long before the limit: writing the summary, closing the workers and leaving
+# the process took up to 6.5 s on 2 loaded cores, which this and the 5 s a run may take past its limit cover.
+_CLOSE_S = 1.5
+_STARTER_SHARE = 1 / 3  # of the time limit, at most, for the starter's tuning before the search
+_LOAD_EVERY_S = 1.0  # how often the deadline follows the workers' speed
+_LOAD_WINDOW = 8  # evaluations per worker over which their recent speed is measured
+
+
+class TimeBudget:
+    """The time of one search from `start` (`time.perf_counter()`) to `end`, its limit (inf
+    without `search.max_seconds`), and the search's `deadline` in between: until the starter's
+    calibration tells what the finish costs (`plan`), a third of the time at most; then early
+    enough for the finish and the programs in flight at the workers' current speed."""
+
+    def __init__(self, max_seconds: float):
+        self.max_seconds = max_seconds
+        self.start = time.perf_counter()
+        self.end = self.start - process_seconds() + max_seconds if max_seconds else math.inf
+        self.deadline = self.start + _STARTER_SHARE * (self.end - self.start)
+        self.episode_seconds = 0.0  # one referee episode of the starter: what the finish costs per episode
+        self.estimated_seconds: Optional[float] = None  # the search by max_samples, before the first batch
+        self.load_factor = 1.0  # the workers' recent seconds per evaluation over the calibration's
+        self._lock = threading.Lock()
+        self._executor: Optional[Executor] = None
+        self._reference = 0.0  # seconds per evaluation until the plan (calibration, the starter's tuning)
+        self._recent: deque[tuple[int, float]] = deque()  # (evaluations, busy seconds) of the executor
+        self._followed = 0.0  # when the deadline last followed the workers' speed
+        self._cfg: Optional[SearchConfig] = None
+        self._in_flight = 0.0  # seconds the programs in flight take past the deadline, at the calibration's speed
+        self._available = 0.0  # for the finish, at the calibration's speed
+
+    @property
+    def limit_seconds(self) -> float:
+        """The run's time limit counted from the search's start; 0 without one."""
+        return self.end - self.start if math.isfinite(self.end) else 0.0
+
+    @property
+    def finish_episode_seconds(self) -> float:
+        """One referee episode at the workers' current speed: what `colmo.finish` plans with."""
+        return self.episode_seconds * self.load_factor
+
+    def past_deadline(self) -> bool:
+        """Whether the search must stop (programs in flight: at their next candidate); thread-safe."""
+        now = time.perf_counter()
+        if self._executor is not None and now - self._followed >= _LOAD_EVERY_S:
+            with self._lock:
+                if now - self._followed >= _LOAD_EVERY_S:
+                    self._followed = now
+                    self._follow_load()
+        return now >= self.deadline
+
+    def plan(self, cfg: SearchConfig, calibration: float, program_seconds: float, executor: Executor) -> None:
+        """The run's duration estimated from the starter's calibration (`calibration` seconds
+        for its training episodes, fast path and referee) and tuning (`program_seconds`, cut
+        short or not) and `executor`'s seconds per evaluation so far; the search's deadline set
+        to leave the finish and the programs in flight their time, both said in one line; from
+        then on the deadline follows `executor`'s speed."""
+        workers = executor.n_workers
+        self.episode_seconds = calibration / cfg.task.episodes
+        self._reference = executor.busy_seconds / executor.evaluations_done if executor.evaluations_done else 0.0
+        per_program = cfg.gfo.budget + 2 if cfg.gfo.tunes_constants else 1  # evaluations: the tuning, the rounded constants, the referee
+        # A starter cut short at its deadline took less than a program will.
+        program_seconds = max(program_seconds, self._reference * per_program / min(cfg.gfo.workers, workers))
+        concurrent_programs = cfg.llm.batch_size * cfg.search.queue_size
+        in_parallel = max(1, min(concurrent_programs, workers // cfg.gfo.workers))
+        self.estimated_seconds = cfg.search.max_samples * program_seconds / in_parallel
+        plan = plan_finish(cfg, self.episode_seconds, workers)
+        limit = "max_samples"
+        if self.max_seconds:
+            # Past the deadline each program in flight ends its candidate, then scores its rounded
+            # constants on the fast path and by the referee: three evaluations each, on shared workers.
+            evaluation = self._reference or program_seconds / per_program
+            self._in_flight = SAFETY * 3 * evaluation * max(1.0, concurrent_programs / workers)
+            self._cfg, self._executor, self._available = cfg, executor, FINISH_SHARE * max(self.end - time.perf_counter(), 0.0)
+            self._recent.append((executor.evaluations_done, executor.busy_seconds))
+            plan = self._set_deadline()
+            limit = f"max_seconds={self.max_seconds:g}"
+            if self.deadline - time.perf_counter() >= self.estimated_seconds:
+                limit = "max_samples"
+        early = ""
+        if limit.startswith("max_seconds"):
+            early = f" (search stops {duration(self.end - self.deadline)} early to finish)"
+            if self.deadline <= time.perf_counter():
+                early = " (no time left to search: the finish works on the starter)"
+        log.info(
+            "estimated duration: search %s (%d samples x %.1f s, %d at a time, generation not included), finish %s; limit that binds: %s%s",
+            duration(self.estimated_seconds), cfg.search.max_samples, program_seconds, in_parallel, duration(plan.seconds), limit, early,
+        )
+
+    def _set_deadline(self) -> FinishPlan:
+        """The deadline that leaves the finish (planned at the current speed) and the programs
+        in flight their time (none if that leaves no time to search); the finish's plan."""
+        plan = plan_finish(self._cfg, self.finish_episode_seconds, self._executor.n_workers, self._available)
+        self.deadline = self.end - plan.seconds - self.load_factor * self._in_flight
+        return plan
+
+    def _follow_load(self) -> None:
+        """`load_factor` from the executor's last `_LOAD_WINDOW` evaluations per worker, and the
+        deadline moved to match."""
+        done, busy = self._executor.evaluations_done, self._executor.busy_seconds
+        self._recent.append((done, busy))
+        window = _LOAD_WINDOW * self._executor.n_workers
+        while len(self._recent) > 2 and self._recent[1][0] <= done - window:
+            self._recent.popleft()
+        first_done, first_busy = self._recent[0]
+        if done - first_done < window / 2 or self._reference <= 0:
+            return
+        factor = max(1.0, (busy - first_busy) / (done - first_done) / self._reference)
+        if abs(factor - self.load_factor) >= 0.1:
+            self.load_factor = factor
+            self._set_deadline()
+            log.debug("the workers run %.1fx slower than calibrated: the search stops at %.0f s", factor, self.deadline - self.start)
+
+    def finish_by(self) -> float:
+        """When the work on the best programs must end (`time.monotonic()`): with a time limit,
+        in time to write the summary and close the workers by its end."""
+        if not self.max_seconds:
+            return math.inf
+        return time.monotonic() + max(self.end - _CLOSE_S - time.perf_counter(), 0.0)
+
+
+def process_seconds() -> float:
+    """Seconds since this process started (Linux's /proc); 0 where that is not known."""
+    try:
+        ticks = int(Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()[19])
+        return max(time.clock_gettime(time.CLOCK_BOOTTIME) - ticks / os.sysconf("SC_CLK_TCK"), 0.0)
+    except (OSError, ValueError, IndexError, AttributeError):
+        return 0.0

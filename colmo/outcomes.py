@@ -1,0 +1,80 @@
+"""A sample's outcome: settled at once (no program could be read from the answer, the static
+check refused it, or its program is known), or its program tuned and scored in a program
+thread of its own (`optimize_program`; the executor is shared). Either way the record is
+stored before its future completes, so whatever waits on it sees it stored; a program whose
+evaluation was cancelled (a second Ctrl-C) is stored `interrupted`, for a resumed run.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+from typing import Callable, Optional
+
+import numpy as np
+
+from colmo.answers import Reading
+from colmo.config import SearchConfig
+from colmo.database import ProgramDatabase
+from colmo.evaluation import CANCELLED, Evaluator, Executor, ExecutorClosed
+from colmo.intake import Unusable
+from colmo.optimize import CandidateEvaluator, ProgramResult, optimize_program
+from colmo.program import ParametricProgram
+from colmo.record import DUPLICATE, FAILED, INTERRUPTED, UNUSABLE, Sample, SampleRecord
+from colmo.sandbox.check import ForbiddenProgram
+from colmo.store import ProgramStore
+
+
+class SampleOutcomes:
+    """The outcomes of one search's samples, evaluated on `executor` with `evaluator` (set once
+    the starter's calibration made it) by `threads` program threads; a tuning stops at its next
+    candidate once `must_stop()`."""
+
+    def __init__(self, cfg: SearchConfig, store: ProgramStore, executor: Executor, threads: int, must_stop: Callable[[], bool]):
+        self.cfg = cfg
+        self.store = store
+        self.executor = executor
+        self.evaluator: Optional[Evaluator] = None
+        self.must_stop = must_stop
+        self.threads = concurrent.futures.ThreadPoolExecutor(threads, thread_name_prefix="colmo-program")
+
+    def optimize(self, program: ParametricProgram, sample: int) -> ProgramResult:
+        """Tune and score `program`, with a seed of its own from the run's seed and `sample`."""
+        seed = int(np.random.SeedSequence([self.cfg.seed, sample + 1]).generate_state(1)[0])
+        evaluate = CandidateEvaluator(self.executor, self.evaluator, program.skeleton)
+        return optimize_program(program, evaluate, self.cfg.gfo, seed, stop=self.must_stop)
+
+    def submit(self, sample: Sample, program: Reading, database: ProgramDatabase) -> concurrent.futures.Future:
+        """Start the evaluation of the sample's program (as `colmo.answers` read it) unless
+        `database` knows it; a future of its stored record."""
+        if isinstance(program, Unusable):
+            return self._settled(SampleRecord.of(sample, UNUSABLE, failure=f"unusable output: {program}"))
+        if isinstance(program, ForbiddenProgram):
+            return self._settled(SampleRecord.of(sample, FAILED, failure=str(program)))
+        if database.is_known(program.key):
+            return self._settled(SampleRecord.of(sample, DUPLICATE, program))
+        # Known from now on, so a batch generated before this one is integrated skips it too.
+        database.mark_seen(program.key)
+        return self.threads.submit(self._evaluate, sample, program)
+
+    def shutdown(self) -> None:
+        """Wait for the program threads (a stopping search has told them to stop)."""
+        self.threads.shutdown(wait=True)
+
+    def _evaluate(self, sample: Sample, program: ParametricProgram) -> SampleRecord:
+        try:
+            result: Optional[ProgramResult] = self.optimize(program, sample.index)
+        except ExecutorClosed:
+            result = None
+        if result is None or result.failure == CANCELLED:
+            return self._stored(SampleRecord.of(sample, INTERRUPTED, program))
+        return self._stored(SampleRecord.of_result(sample, program, result))
+
+    def _stored(self, record: SampleRecord) -> SampleRecord:
+        self.store.add(record)
+        return record
+
+    def _settled(self, record: SampleRecord) -> concurrent.futures.Future:
+        """A sample settled without evaluation, stored, as a completed future of its record."""
+        done: concurrent.futures.Future = concurrent.futures.Future()
+        done.set_result(self._stored(record))
+        return done
