@@ -35,7 +35,7 @@ import dataclasses
 import hashlib
 import math
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Optional
 
 import numpy as np
 
@@ -201,12 +201,3 @@ class ProgramDatabase:
     def programs(self, island: int) -> list[StoredProgram]:
         """The programs held by `island`, cluster by cluster in order of creation."""
         return [program for cluster in self._islands[island].clusters.values() for program in cluster]
-
-    def state(self) -> dict[str, Any]:
-        """A JSON-able snapshot for logging."""
-        return {
-            "programs": self.n_programs,
-            "island_sizes": self.island_sizes,
-            "best_per_island": self.best_per_island,
-            "known_structures": len(self._seen),
-        }

@@ -143,23 +143,17 @@ def instantiate(skeleton: str, values: Sequence[float], digits: int | None = Non
     return ast.unparse(replace_nodes(tree, literals))
 
 
-def count_lines(code: str) -> int:
-    """Non-blank lines of the module once docstrings and comments are gone, as ast.unparse lays it out
-    (so the count does not depend on the author's line wrapping)."""
-    tree = _parse(code)
-    strip_docstrings(tree)
-    return _line_count(tree)
-
-
 def _line_count(tree: ast.Module) -> int:
     return sum(1 for line in ast.unparse(tree).splitlines() if line.strip())
 
 
 @dataclass(frozen=True)
 class ProgramSize:
-    """How big a program is to read: lines (as `count_lines`), AST nodes (`astutil.node_count`,
-    docstrings excluded; a signed literal is one node) and tunable constants. The one size colmo
-    reports: the store, the search, `colmo.optimize` and `colmo.simplify` all use `measure`."""
+    """How big a program is to read: lines (non-blank, once docstrings and comments are gone, as
+    `ast.unparse` lays it out, so the count does not depend on the author's wrapping), AST nodes
+    (`astutil.node_count`, docstrings excluded; a signed literal is one node) and tunable
+    constants. The one size colmo reports: the store, the search, `colmo.optimize` and
+    `colmo.simplify` all use `measure`."""
 
     lines: int
     nodes: int

@@ -10,13 +10,13 @@ import pytest
 
 from colmo.config import DatabaseConfig
 from colmo.database import ProgramDatabase, StoredProgram
-from colmo.program import count_lines
+from colmo.program import measure
 
 STARTER = StoredProgram("starter", "def policy(obs):\n    return 0.0\n", 0.0, 0, -1)
 
 
 def code(lines: int) -> str:
-    """A policy that count_lines counts as `lines` lines."""
+    """A policy of `lines` lines as `measure` counts them."""
     return "def policy(obs):\n" + "    a = 1.0\n" * (lines - 2) + "    return a\n"
 
 
@@ -33,7 +33,7 @@ def frequencies(draws: list[str]) -> dict[str, float]:
 
 
 def test_code_helper_has_the_requested_length():
-    assert [count_lines(code(n)) for n in (2, 5, 12)] == [2, 5, 12]
+    assert [measure(code(n)).lines for n in (2, 5, 12)] == [2, 5, 12]
 
 
 def test_every_island_starts_with_the_starter():
@@ -143,7 +143,7 @@ def test_dedup_by_structure_key():
         db.register(program("y", 2.0, island=1))
     with pytest.raises(AssertionError, match="failed program"):
         db.register(program("z", float("nan")))
-    assert db.n_programs == 3 and db.state()["known_structures"] == 3
+    assert db.n_programs == 3 and [db.is_known(key) for key in ("starter", "x", "y", "z")] == [True, True, True, False]
 
 
 def test_best_is_the_first_program_to_reach_the_top_score():
@@ -152,7 +152,7 @@ def test_best_is_the_first_program_to_reach_the_top_score():
     db.register(program("b", 3.0, island=0, sample=2))
     db.register(program("c", 2.0, island=0, sample=3))
     assert db.best.key == "a" and db.best_per_island == [3.0, 3.0]
-    assert db.state() == {"programs": 5, "island_sizes": [3, 2], "best_per_island": [3.0, 3.0], "known_structures": 4}
+    assert db.n_programs == 5 and db.island_sizes == [3, 2] and all(db.is_known(key) for key in ("starter", "a", "b", "c"))
 
 
 def four_islands(seed: int = 0) -> ProgramDatabase:
@@ -236,7 +236,7 @@ def run(db: ProgramDatabase, draw_prompts: bool) -> tuple[list, list]:
 
 
 def snapshot(db: ProgramDatabase) -> list:
-    return [db.programs(i) for i in range(6)] + [db.best, db.state()]
+    return [db.programs(i) for i in range(6)] + [db.best, db.island_sizes, db.best_per_island]
 
 
 def test_same_seed_same_calls_same_selections_and_state():

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 
-from colmo.program import ParametricProgram, ProgramError, count_lines, instantiate, parametrize
+from colmo.program import ParametricProgram, ProgramError, instantiate, measure, parametrize
 
 # The five policies of the paper's Fig. 5 (examples/paper_*.py: missing colon of ball-in-cup fixed).
 PENDULUM, CHEETAH, QUADRUPED, BALL_IN_CUP, UNITREE_A1 = (
@@ -151,7 +151,7 @@ def test_other_paper_policies_render_readably():
 
 
 def test_paper_line_counts():
-    counts = {task: count_lines(code) for task, (code, _, _) in PAPER.items()}
+    counts = {task: measure(code).lines for task, (code, _, _) in PAPER.items()}
     # The policy lines of Fig. 5, plus the example files' `import numpy as np`.
     assert counts == {"pendulum": 8, "cheetah": 12, "quadruped": 16, "ball_in_cup": 11, "unitree_a1": 19}
 
@@ -386,11 +386,11 @@ def test_instantiate_checks_the_value_count():
         instantiate(SKELETON, (1.0, 2.0))
 
 
-def test_count_lines_ignores_wrapping_comments_and_docstrings():
+def test_lines_ignore_wrapping_comments_and_docstrings():
     code = '"""Module doc."""\nimport numpy as np\n\n\ndef policy(obs):\n    """Doc."""\n    # comment\n    return np.array([\n        1.0,\n        2.0,\n    ]) * obs[0]\n'
-    assert count_lines(code) == 3
+    assert measure(code).lines == 3
     with pytest.raises(ProgramError):
-        count_lines("def policy(obs:\n")
+        measure("def policy(obs:\n")
 
 
 def test_deeply_nested_program_is_a_program_error_not_a_crash():

@@ -21,7 +21,8 @@ _FUNCTIONS = ("sin", "cos", "tanh", "sign", "abs")
 _ARITHMETIC = (ast.Add, ast.Sub, ast.Mult, ast.Div)
 _FLIPPED = {ast.Lt: ast.Gt, ast.Gt: ast.Lt, ast.LtE: ast.GtE, ast.GtE: ast.LtE, ast.Eq: ast.NotEq, ast.NotEq: ast.Eq}
 _VALUE_KINDS = (ast.BinOp, ast.Call, ast.Name, ast.Attribute, ast.Subscript, ast.IfExp)
-# Fields whose subtrees are not values to rewrite: indices, called functions, attribute owners.
+
+
 def _is_number(node: ast.AST) -> bool:
     return isinstance(node, ast.Constant) and type(node.value) in (int, float)
 
