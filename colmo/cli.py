@@ -256,11 +256,17 @@ def _shown(node: DictConfig, name: str) -> str:
 
 def _field_lines(node: DictConfig, prefix: str) -> list[str]:
     """`prefix.field=value` and its documentation, for each documented field of the dataclass
-    `node` was composed from (the chosen option's own schema)."""
+    `node` was composed from (the chosen option's own schema); a field that is itself a schema
+    (`task.perturb`) with each of its own fields."""
     schema = OmegaConf.get_type(node)
     lines = []
     for item in dataclasses.fields(schema):
-        if "help" in item.metadata:
+        if "help" not in item.metadata:
+            continue
+        value = None if OmegaConf.is_missing(node, item.name) else node[item.name]
+        if isinstance(value, DictConfig) and dataclasses.is_dataclass(OmegaConf.get_type(value)):
+            lines += [f"  {prefix}{item.name}.*:", *_wrapped(_field_help(schema, item), 6), *_field_lines(value, f"{prefix}{item.name}.")]
+        else:
             lines += [f"  {prefix}{item.name}={_shown(node, item.name)}", *_wrapped(_field_help(schema, item), 6)]
     return lines
 

@@ -4,7 +4,9 @@ simplified best policy, and a video and plot of it in action.
 A search selects programs by their training score, which therefore flatters the winner; the
 top `evaluation.top` structures get a held-out score from the referee on `evaluation.episodes`
 fresh episodes (`colmo.evaluate`). The best one is then simplified (`colmo.simplify`) and
-rendered (`colmo.render`) on its first held-out episode, into the run directory. Each step is
+rendered (`colmo.render`) on its first held-out episode, into the run directory; with
+`evaluation.robustness`, before that, scored over a grid of model-mismatch magnitudes
+(`colmo.robustness`: robustness.json/.csv/.png, a few numbers in the summary). Each step is
 optional, and none can fail the search: a missing OpenGL or a simplification that finds
 nothing to remove is a line in the log and in the summary.
 
@@ -32,6 +34,7 @@ from colmo.errors import RunError
 from colmo.evaluate import heldout_evaluator, heldout_score
 from colmo.evaluation import CANCELLED, Evaluator, Executor
 from colmo.record import EVALUATED, SampleRecord
+from colmo.robustness import grid_points, perturbed, robustness_report, save
 from colmo.store import SIMPLIFIED_POLICY_FILE, ProgramStore
 
 log = logging.getLogger("colmo.search")
@@ -56,13 +59,16 @@ class FinishPlan:
     video_seconds: float
     size: tuple[int, int]  # of the video
     reduced: bool  # cheaper than configured, to fit the time limit
+    robustness_seconds: float = 0.0  # the best program's robustness report; 0: none
 
     @property
     def seconds(self) -> float:
-        return self.heldout_seconds + self.simplify_seconds + self.render_seconds
+        return self.heldout_seconds + self.robustness_seconds + self.simplify_seconds + self.render_seconds
 
     def describe(self, cfg: SearchConfig) -> str:
         parts = [f"held-out scores of {self.top} program(s) over {self.heldout_episodes} episodes"]
+        if cfg.evaluation.robustness:
+            parts.append("robustness report" if self.robustness_seconds else "no robustness report")
         if cfg.evaluation.simplify:
             parts.append(f"simplification {self.simplify_seconds:.0f} s")
         if cfg.evaluation.render:
@@ -82,9 +88,15 @@ def plan_finish(cfg: SearchConfig, episode_seconds: float, workers: int, availab
     # The simplifier measures the best program twice on both episode sets, then a few rounds.
     simplify = 6 * (heldout_cost(1, episodes) + heldout_cost(1, cfg.task.episodes)) if cfg.evaluation.simplify else 0.0
     render = episode + _RENDER_FIXED_S + _VIDEO_S if cfg.evaluation.render else 0.0
-    full = FinishPlan(top, episodes, heldout_cost(top, episodes), simplify, render, _VIDEO_S, (640, 480), False)
+    grid = grid_points(cfg.evaluation.robustness_magnitudes, cfg.evaluation.robustness_delays)
+    robustness = heldout_cost(grid, cfg.evaluation.robustness_episodes) if cfg.evaluation.robustness else 0.0
+    full = FinishPlan(top, episodes, heldout_cost(top, episodes), simplify, render, _VIDEO_S, (640, 480), False, robustness)
     if full.seconds <= available:
         return full
+    # The robustness report, already on few episodes, is whole or skipped: it keeps its cost if that fits in an equal share.
+    if robustness > available / (1 + cfg.evaluation.simplify + cfg.evaluation.render + cfg.evaluation.robustness):
+        robustness = 0.0
+    available -= robustness
     # The render first gets what it cannot do without (the episode, the plot, a few frames).
     render = max(episode + _RENDER_FIXED_S + _VIDEO_MIN_S, available / (1 + cfg.evaluation.simplify + cfg.evaluation.render)) if cfg.evaluation.render else 0.0
     share = max(available - render, 0.0) / (1 + cfg.evaluation.simplify)
@@ -94,7 +106,7 @@ def plan_finish(cfg: SearchConfig, episode_seconds: float, workers: int, availab
     video = max(render - episode - _RENDER_FIXED_S, _VIDEO_MIN_S)
     return FinishPlan(
         kept, min(episodes, per_program * workers), heldout_cost(kept, per_program * workers),
-        share if cfg.evaluation.simplify else 0.0, render, video, (640, 480) if video >= _VIDEO_S else _SMALL, True,
+        share if cfg.evaluation.simplify else 0.0, render, video, (640, 480) if video >= _VIDEO_S else _SMALL, True, robustness,
     )
 
 
@@ -106,6 +118,7 @@ class BestPrograms:
     heldout: list[dict] = field(default_factory=list)
     media: dict = field(default_factory=dict)
     simplified: dict = field(default_factory=dict)
+    robustness: dict = field(default_factory=dict)
 
 
 def top_records(store: ProgramStore, count: int) -> list[SampleRecord]:
@@ -150,10 +163,15 @@ def finish(
             "sample": record.sample, "key": record.key, "score": record.score, "heldout_score": score, "heldout_failure": evaluation.failure,
             "episodes": len(heldout.seeds),
         })
-        shown = "failed" if score is None else f"{score:.2f}"
-        log.info("sample %d: training score %.2f, held-out %s over %d episodes", record.sample, record.score, shown, len(heldout.seeds))
+        log.info("sample %d: training score %.2f, held-out %s over %d episodes", record.sample, record.score, _shown(score), len(heldout.seeds))
     if not top:
         return best
+    if cfg.evaluation.robustness:
+        # Its time comes out of the simplification's slot, which takes what is left.
+        if not best.heldout or not plan.robustness_seconds or _left(until) - plan.render_seconds < plan.robustness_seconds:
+            log.warning("no time left for the robustness report of the best policy (search.max_seconds)")
+        else:
+            best.robustness = _robustness(cfg, executor, evaluator, top[0], run_dir)
     if cfg.evaluation.simplify:
         simplify_until = until - plan.render_seconds
         # Simplifying first measures the best program on the training and the held-out episodes.
@@ -164,6 +182,33 @@ def finish(
     if cfg.evaluation.render:
         best.media = _render(cfg, executor, heldout, top[0], run_dir, until, plan)
     return best
+
+
+def _robustness(cfg: SearchConfig, executor: Executor, evaluator: Evaluator, record: SampleRecord, run_dir: Path) -> dict:
+    """The best policy's robustness report (`colmo.robustness`) on `evaluation.robustness_episodes`
+    held-out episodes per grid point, saved into the run directory; the summary's `robustness`."""
+    options = cfg.evaluation
+    heldout = heldout_evaluator(evaluator, cfg.seed, options.robustness_episodes)
+    report = robustness_report(
+        lambda perturb: heldout_score(executor, perturbed(heldout, perturb), record.skeleton, record.params),
+        options.robustness_magnitudes, options.robustness_delays,
+    )
+    if any(point.evaluation.failure == CANCELLED for point in report.points):  # the search is stopping at once
+        return {}
+    paths = save(report, run_dir, f"{cfg.task.name}: best policy (sample {record.sample})")
+    headline = report.headline()
+    log.info(
+        "best policy under model mismatch (%d held-out episodes per point): nominal %s, worst %s, every factor at 10%% %s; %s",
+        options.robustness_episodes, *(_shown(headline[name]) for name in ("robustness_nominal", "robustness_worst", "robustness_all_10")),
+        ", ".join(path.name for path in paths),
+    )
+    for failure in report.failures():
+        log.warning("robustness: %s", failure)
+    return {**headline, "episodes": options.robustness_episodes, "files": [path.name for path in paths]}
+
+
+def _shown(score: Optional[float]) -> str:
+    return "failed" if score is None else f"{score:.2f}"
 
 
 def _render(cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float, plan: FinishPlan) -> dict:

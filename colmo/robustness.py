@@ -14,15 +14,18 @@ from __future__ import annotations
 import csv
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 from colmo.config import PerturbConfig
-from colmo.evaluation import Evaluation
+from colmo.environments.perturb import PERTURB_OPTION, with_perturbation
+from colmo.evaluation import Evaluation, Evaluator
 
 FACTORS = ("mass", "damping", "frictionloss", "friction", "gain", "obs_noise", "action_noise")
 ALL = "all"
+FILES = ("robustness.json", "robustness.csv", "robustness.png")  # what `save` writes
+HEADLINE_MAGNITUDE = 0.1  # `headline` quotes every factor together at this magnitude
 
 
 @dataclass(frozen=True)
@@ -65,16 +68,44 @@ class RobustnessReport:
     def failures(self) -> list[str]:
         return [f"{p.factor} {p.magnitude:g}: {p.evaluation.failure}" for p in self.points if p.evaluation.failure]
 
+    def headline(self) -> dict[str, Optional[float]]:
+        """A few numbers that summarize the report (the metrics a tracker logs): the nominal
+        score, the worst over every grid point that scored, every factor together at 10% (None
+        when the grid lacks that magnitude) and the number of points that failed."""
+        scores = [score for score in (self.nominal_score, *(p.score for p in self.points)) if score is not None]
+        together = self.score(ALL, HEADLINE_MAGNITUDE) if HEADLINE_MAGNITUDE in self.magnitudes else None
+        return {
+            "robustness_nominal": self.nominal_score, "robustness_worst": min(scores, default=None),
+            "robustness_all_10": together, "robustness_failures": float(len(self.failures())),
+        }
+
+
+def grid(magnitudes: Sequence[float], delays: Sequence[int]) -> tuple[tuple[float, ...], tuple[int, ...]]:
+    """The nonzero magnitudes and delays of a grid, each once and in increasing order."""
+    return tuple(sorted({float(m) for m in magnitudes if m > 0})), tuple(sorted({int(k) for k in delays if k > 0}))
+
+
+def grid_points(magnitudes: Sequence[float], delays: Sequence[int]) -> int:
+    """How many perturbations `robustness_report` scores, the nominal model included."""
+    relative, steps = grid(magnitudes, delays)
+    return 1 + (len(FACTORS) + 1) * len(relative) + len(steps)
+
+
+def perturbed(evaluator: Evaluator, perturb: PerturbConfig) -> Evaluator:
+    """`evaluator` on the nominal model (without the training perturbation of a search under
+    `task.perturb`) with the perturbation `perturb` instead: one point of a grid."""
+    nominal = {name: value for name, value in evaluator.env if name != PERTURB_OPTION}
+    return replace(evaluator, env=tuple(sorted(with_perturbation(nominal, perturb).items())))
+
 
 def robustness_report(
     score: Callable[[PerturbConfig], Evaluation], magnitudes: Sequence[float], delays: Sequence[int] = (),
 ) -> RobustnessReport:
     """Score the nominal model, every factor alone and all together at each of `magnitudes`,
     and each control delay of `delays` steps."""
-    magnitudes = tuple(sorted({float(m) for m in magnitudes if m > 0}))
+    magnitudes, delays = grid(magnitudes, delays)
     points = [Point(name, m, score(PerturbConfig(**{name: m}))) for name in FACTORS for m in magnitudes]
     points += [Point(ALL, m, score(PerturbConfig(**{name: m for name in FACTORS}))) for m in magnitudes]
-    delays = tuple(sorted({int(k) for k in delays if k > 0}))
     points += [Point("delay", k, score(PerturbConfig(delay=k))) for k in delays]
     return RobustnessReport(score(PerturbConfig()), magnitudes, tuple(points), delays)
 
@@ -100,7 +131,7 @@ def save(report: RobustnessReport, directory: Path, title: str) -> list[Path]:
     from matplotlib.figure import Figure
 
     directory.mkdir(parents=True, exist_ok=True)
-    paths = [directory / "robustness.json", directory / "robustness.csv", directory / "robustness.png"]
+    paths = [directory / name for name in FILES]
     paths[0].write_text(json.dumps({"robustness": report.entries(), "delay": report.delay_entries()}, indent=1) + "\n")
     with paths[1].open("w", newline="") as stream:
         writer = csv.writer(stream)

@@ -393,7 +393,7 @@ class Search:
             task=self.cfg.task.name, best_score=best.score if best else None, best_heldout_score=best_heldout,
             best_key=best.key if best else None, best_code=best.code if best else None,
             best_so_far=tuple(self.best_so_far), stop_reason=self.stop_reason, run_dir=str(self.run_dir),
-            heldout=tuple(programs.heldout), media=programs.media, simplified=programs.simplified,
+            heldout=tuple(programs.heldout), media=programs.media, simplified=programs.simplified, robustness=programs.robustness,
             **dataclasses.asdict(self.totals()),
         )
 

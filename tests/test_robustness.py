@@ -1,14 +1,20 @@
-"""Model mismatch (`task.perturb`) and the robustness report of `colmo-evaluate robustness=true`."""
+"""Model mismatch (`task.perturb`) and the robustness report of `colmo-evaluate robustness=true` and of
+a search's finish (`evaluation.robustness`)."""
 
 from __future__ import annotations
+
+import json
 
 import numpy as np
 import pytest
 from conftest import compose, last_json_line, run_colmo
+from mlflow import MlflowClient
 
+from colmo.cli import help_text
 from colmo.config import PerturbConfig
 from colmo.environments.perturb import PerturbedEnvironment, with_perturbation
 from colmo.errors import ConfigError
+from colmo.finish import plan_finish
 from colmo.rollout import episode_seeds, evaluate_policy
 from colmo.specs import load_spec
 from colmo.store import run_settings
@@ -117,6 +123,56 @@ def test_colmo_evaluate_robustness_reports_each_magnitude_nominal_first_and_repe
     assert len({nominal[factor] for factor in nominal if factor != "magnitude"}) == 1
     assert first["robustness"][2]["all"] != nominal["all"]
     assert "magnitude" in run.stdout and len(list(tmp_path.rglob("robustness.png"))) == 2
+
+
+def test_the_finish_plans_the_robustness_report_whole_or_not_at_all():
+    grid = ("evaluation.robustness_magnitudes=[0.1,0.2]", "evaluation.robustness_delays=[1]", "evaluation.robustness_episodes=3")
+    quiet = ("evaluation.simplify=false", "evaluation.render=false", "evaluation.top=1", "evaluation.episodes=2")
+    assert plan_finish(compose("search", *quiet, *grid), 1.0, 2).robustness_seconds == 0  # off by default
+    on = compose("search", *quiet, *grid, "evaluation.robustness=true")
+    full = plan_finish(on, 1.0, 2)
+    # 1 + 8 x 2 + 1 = 18 points of 3 episodes on 2 workers (2 rounds), each episode 1.5 s on a loaded machine
+    assert full.robustness_seconds == pytest.approx(18 * 2 * 1.5) and full.seconds == pytest.approx(full.heldout_seconds + 54)
+    assert "robustness report" in full.describe(on) and not full.reduced
+    short = plan_finish(on, 1.0, 2, available=30.0)
+    assert short.reduced and short.robustness_seconds == 0 and "no robustness report" in short.describe(on)
+    # Short of time, the report keeps its whole cost where that fits in an equal share (here a half: held-out,
+    # robustness), and the held-out scores of 3 programs over 100 episodes (225 s) get the rest.
+    heavy = compose("search", *quiet, *grid, "evaluation.robustness=true", "evaluation.top=3", "evaluation.episodes=100")
+    kept = plan_finish(heavy, 1.0, 2, available=110.0)
+    assert kept.reduced and kept.robustness_seconds == 54 and kept.seconds <= 110
+    assert plan_finish(heavy, 1.0, 2, available=100.0).robustness_seconds == 0
+
+
+def test_a_search_with_evaluation_robustness_saves_and_logs_its_best_policys_report(tmp_path):
+    run = run_colmo(
+        "colmo", "task=pendulum", "search.max_samples=2", "llm.batch_size=2", "gfo=none", "task.episodes=1",
+        "evaluation.episodes=1", "evaluation.top=1", "evaluation.render=false", "evaluation.simplify=false",
+        "executor.workers=1", "search.progress=false", "evaluation.robustness=true", "evaluation.robustness_episodes=1",
+        "evaluation.robustness_magnitudes=[0.1]", "evaluation.robustness_delays=[]", f"hydra.run.dir={tmp_path / 'run'}",
+        cwd=tmp_path, timeout=600,
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    robustness = summary["robustness"]
+    assert robustness["files"] == ["robustness.json", "robustness.csv", "robustness.png"]
+    assert all((tmp_path / "run" / name).is_file() for name in robustness["files"])
+    saved = json.loads((tmp_path / "run" / "robustness.json").read_text())
+    assert [entry["magnitude"] for entry in saved["robustness"]] == [0.0, 0.1]
+    assert robustness["robustness_nominal"] == saved["robustness"][0]["all"]
+    assert robustness["robustness_all_10"] == saved["robustness"][1]["all"]
+    assert robustness["robustness_worst"] == min(value for entry in saved["robustness"] for name, value in entry.items() if name != "magnitude")
+    client = MlflowClient(f"sqlite:///{tmp_path / 'mlruns.db'}")
+    (logged,) = client.search_runs([client.get_experiment_by_name("pendulum").experiment_id])
+    for name in ("robustness_nominal", "robustness_worst", "robustness_all_10", "robustness_failures"):
+        assert logged.data.metrics[name] == pytest.approx(robustness[name]), name
+    assert {f.path for f in client.list_artifacts(logged.info.run_id, "robustness")} == {f"robustness/{name}" for name in robustness["files"]}
+
+
+def test_help_lists_each_perturbation_field_with_its_value():
+    text = help_text("search", "", ["task=cheetah", "task.perturb.mass=0.2"])
+    assert "  task.perturb.*:\n" in text and "  task.perturb.mass=0.2\n" in text and "  task.perturb.delay=0\n" in text
+    assert "task.perturb={" not in text
 
 
 def test_a_search_under_a_perturbation_is_a_run_of_its_own():

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Optional
 
 from colmo.config.fields import above, at_least, option, require
+from colmo.config.task import ROBUSTNESS_DELAYS, ROBUSTNESS_MAGNITUDES, check_robustness_grid
 
 
 @dataclass
@@ -38,9 +39,16 @@ class HeldoutConfig:
     top: int = option(3, "the best programs of a search that get a held-out score at its end")
     render: bool = option(True, "at the end of a search, a video and a plot of the best policy on a held-out episode")
     simplify: bool = option(True, "at the end of a search, the best policy simplified (simplified_policy.py; options: simplify.*)")
+    robustness: bool = option(
+        False, "at the end of a search, the best policy scored over a grid of model-mismatch magnitudes (robustness.json/.csv/.png; colmo.robustness)",
+    )
+    robustness_episodes: int = option(3, "held-out episodes per robustness grid point")
+    robustness_magnitudes: list[float] = option(ROBUSTNESS_MAGNITUDES, "relative magnitudes of the robustness grid (0, nominal, is always scored)")
+    robustness_delays: list[int] = option(ROBUSTNESS_DELAYS, "control delays (steps) of the robustness grid")
 
     def __post_init__(self) -> None:
         at_least(self, "evaluation", episodes=1, top=1)
+        check_robustness_grid("evaluation.", self.robustness_episodes, self.robustness_magnitudes, self.robustness_delays)
 
 
 @dataclass

@@ -41,6 +41,17 @@ class PerturbConfig:
         return any(getattr(self, name) for name in self.__dataclass_fields__)
 
 
+ROBUSTNESS_MAGNITUDES = [0.05, 0.1, 0.2, 0.4]  # a robustness grid's relative magnitudes (colmo.robustness)
+ROBUSTNESS_DELAYS = [1, 2, 4]  # ... and its control delays, in steps
+
+
+def check_robustness_grid(group: str, episodes: int, magnitudes: list[float], delays: list[int]) -> None:
+    """`ConfigError` for a robustness grid (`group`'s `robustness_*` fields) that cannot be scored."""
+    require(episodes >= 1, f"{group}robustness_episodes must be >= 1, got {episodes}")
+    require(all(0 < m < 1 for m in magnitudes), f"{group}robustness_magnitudes must lie in (0, 1), got {list(magnitudes)}")
+    require(all(k >= 1 for k in delays), f"{group}robustness_delays must be >= 1 step, got {list(delays)}")
+
+
 @dataclass
 class TaskConfig:
     """The control task: a spec file and how it is scored."""

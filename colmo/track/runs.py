@@ -26,7 +26,9 @@ What a search's run holds:
   (`MlflowClient(uri).load_table` also searches the *global* tracking URI: set it.)
 - at the end: best_policy.py, simplified_policy.py (when simplification made it), summary.json, the Hydra config files under `hydra/`, the
   best-so-far plot `best_so_far.png` (against model calls and against seconds, side by side), and the best policy's plot and video on a held-out episode
-  under `best_policy/` (when `evaluation.render` made them); status FINISHED, KILLED (interrupted) or FAILED (the
+  under `best_policy/` (when `evaluation.render` made them), with `evaluation.robustness` its robustness report
+  (`robustness.json/.csv/.png` under `robustness/`, metrics `robustness_nominal`, `robustness_worst`,
+  `robustness_all_10` (every factor at 10%), `robustness_failures`); status FINISHED, KILLED (interrupted) or FAILED (the
   generator failed, or the process exited without finishing the search).
 
 A `colmo-optimize` run (`track_optimize`) holds the same params and tags, the metrics of its
@@ -211,7 +213,8 @@ class MlflowTracker:
 
     def on_finish(self, summary: Summary) -> None:
         # The rest of the summary's totals were logged with the last batch.
-        log_metrics(self.client, self.run_id, {"best_heldout_score": summary.best_heldout_score}, summary.samples)
+        headline = {name: value for name, value in summary.robustness.items() if name.startswith("robustness_")}
+        log_metrics(self.client, self.run_id, {"best_heldout_score": summary.best_heldout_score, **headline}, summary.samples)
         heldout = {entry["sample"]: entry["heldout_score"] for entry in summary.heldout}
         for row in self.rows:
             row["heldout_score"] = heldout.get(row["sample"], row["heldout_score"])
@@ -224,6 +227,8 @@ class MlflowTracker:
         for kind in ("plot", "video"):  # the best policy on a held-out episode
             if kind in summary.media and (run_dir / summary.media[kind]).is_file():
                 self.client.log_artifact(self.run_id, str(run_dir / summary.media[kind]), "best_policy")
+        for name in summary.robustness.get("files", ()):  # the best policy under model mismatch
+            self.client.log_artifact(self.run_id, str(run_dir / name), "robustness")
         self.run.log_hydra_config()
         if self.steps:
             self.client.log_figure(self.run_id, self._figure(summary.task), PLOT_FILE)
