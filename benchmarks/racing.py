@@ -6,7 +6,7 @@ The workload is the paper's inner loop on mistuned programs: per task, the paper
 the task's 10 training episodes of run seed 0, optimizer seed = the program's index; so racing
 off and on tune the same programs from the same seeds. Everything goes through the real
 evaluation path: sandboxed workers (`colmo.executor.LocalExecutor`), time limits calibrated on
-the task's starter (`colmo.evaluate.task_evaluator`), `colmo.optimize.tune.optimize_program`
+the task's starter (`colmo.heldout.task_evaluator`), `colmo.optimize.tune.optimize_program`
 (tuning, then the readable 4-digit code scored by the referee over all episodes).
 
 Each of `--workers` lanes owns a one-worker executor and takes the next job (a program with
@@ -38,9 +38,9 @@ import numpy as np
 
 from colmo.cli import compose
 from colmo.config import ExecutorConfig, GFOConfig, TaskConfig
-from colmo.evaluate import task_evaluator
 from colmo.evaluation import Evaluator
 from colmo.executor import LocalExecutor
+from colmo.heldout import task_evaluator
 from colmo.optimize.tune import CandidateEvaluator, optimize_program
 from colmo.program import ParametricProgram, parametrize
 

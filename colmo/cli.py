@@ -51,8 +51,12 @@ SCHEMAS: dict[tuple[Optional[str], str], type] = {
     ("llm", "openai_schema"): config.OpenAIConfig,
     ("llm", "vllm_schema"): config.VLLMConfig,
     ("llm", "llamacpp_schema"): config.LlamaCppConfig,
-    (None, "optimize_schema"): config.OptimizeConfig,
     (None, "search_schema"): config.SearchConfig,
+    (None, "optimize_schema"): config.OptimizeConfig,
+    (None, "evaluate_schema"): config.EvaluateConfig,
+    (None, "simplify_schema"): config.SimplifyAppConfig,
+    (None, "render_schema"): config.RenderConfig,
+    (None, "report_schema"): config.ReportConfig,
 }
 
 
@@ -127,12 +131,17 @@ def _sweep_values(override: Any) -> list[str]:
     return [str(int(end)) if integer else Transformer.encode(float(end)) for end in ends]
 
 
-def _sweep_variants(overrides: list[str]) -> list[list[str]]:
+def _sweep_variants(overrides: list[str], multirun: bool) -> list[list[str]]:
     """The override lists of the first job and of each other value of each sweep, so that
-    every value a sweep takes is composed once."""
+    every value a sweep takes is composed once; `ConfigError` for a sweep without `multirun`
+    (Hydra's own message is four lines)."""
     from hydra.core.override_parser.overrides_parser import OverridesParser
 
     parsed = OverridesParser.create().parse_overrides(overrides)
+    for override in parsed:
+        if override.is_sweep_override() and not multirun:
+            key = override.get_key_element()
+            raise ConfigError(f"{override.input_line} is a sweep: add -m for one job per value (or write a list {key}=[a,b], a string {key}='a,b')")
     first = [o.input_line if not o.is_sweep_override() else f"{o.get_key_element()}={_sweep_values(o)[0]}" for o in parsed]
     variants = [first]
     for index, override in enumerate(parsed):
@@ -144,11 +153,15 @@ def _sweep_variants(overrides: list[str]) -> list[list[str]]:
     return variants
 
 
-def hydra_app(config_name: str, check: Optional[Callable[[Any], None]] = None) -> Callable[[Callable[[Any], Any]], Callable[[], None]]:
+def hydra_app(
+    config_name: str, check: Optional[Callable[[Any], None]] = None, example: Optional[str] = None
+) -> Callable[[Callable[[Any], Any]], Callable[[], None]]:
     """`hydra.main` over colmo's bundled configs, with one-line errors (module docstring).
 
     `check(cfg)` vets the inputs a config names (files, directories) for every job of a sweep
-    before Hydra starts, raising `ConfigError`, so a bad input leaves no output directory."""
+    before Hydra starts, raising `ConfigError`, so a bad input leaves no output directory.
+    `example`: the overrides of the one-run example in `--help` (default: two groups' options
+    and `seed=1`)."""
 
     def decorate(run: Callable[[Any], Any]) -> Callable[[], None]:
         @functools.wraps(run)
@@ -169,7 +182,7 @@ def hydra_app(config_name: str, check: Optional[Callable[[Any], None]] = None) -
             args = get_args_parser().parse_args(sys.argv[1:])
             if args.help:
                 try:
-                    print(help_text(config_name, run.__doc__ or "", list(args.overrides)))
+                    print(help_text(config_name, run.__doc__ or "", list(args.overrides), example))
                 except Exception as error:  # a bad override: one line, as for a run
                     _fail(error, verbose=_verbose(args.overrides), code=EXIT_USAGE)
                 return
@@ -180,7 +193,7 @@ def hydra_app(config_name: str, check: Optional[Callable[[Any], None]] = None) -
                 if args.config_dir:
                     overrides.append(f"hydra.searchpath=[file://{os.path.abspath(args.config_dir)}]")
                 try:
-                    for variant in _sweep_variants(overrides):
+                    for variant in _sweep_variants(overrides, multirun=bool(args.multirun)):
                         cfg = compose(config_name, variant, output_dir=None if args.cfg or args.info else args.multirun)
                         if check is not None and not (args.cfg or args.info):
                             check(cfg)
@@ -298,7 +311,7 @@ def _usage(prog: str, example: str) -> list[str]:
     return [f"  {form:<{width}}   {what}" for form, what in forms]
 
 
-def help_text(config_name: str, summary: str, overrides: list[str]) -> str:
+def help_text(config_name: str, summary: str, overrides: list[str], example: Optional[str] = None) -> str:
     """colmo's `--help`: the app, its config groups with their options (the chosen ones marked),
     and the documented fields of the config that `overrides` compose, with their values."""
     from hydra import compose as hydra_compose
@@ -316,10 +329,10 @@ def help_text(config_name: str, summary: str, overrides: list[str]) -> str:
     lines = [
         f"{prog}: {(root.__doc__ or '').strip().split(': ', 1)[-1]}", *_wrapped(inspect.cleandoc(summary).split("\n\n")[0], 0), "",
         "Usage:",
-        *_usage(prog, f"{prog} {' '.join(f'{g}={choices[g]}' for g in groups[:2])} seed=1"),
-        "",
-        "Config groups (GROUP=OPTION; * chosen):",
+        *_usage(prog, f"{prog} {example or ' '.join(f'{g}={choices[g]}' for g in groups[:2]) + ' seed=1'}"),
     ]
+    if groups:
+        lines += ["", "Config groups (GROUP=OPTION; * chosen):"]
     for group in groups:
         lines.append(f"  {group}")
         for option in _group_options(group):

@@ -3,7 +3,7 @@ simplified best policy, and a video and plot of it in action.
 
 A search selects programs by their training score, which therefore flatters the winner; the
 top `evaluation.top` structures get a held-out score from the referee on `evaluation.episodes`
-fresh episodes (`colmo.evaluate`). The best one is then simplified (`colmo.simplify`) and
+fresh episodes (`colmo.heldout`). The best one is then simplified (`colmo.simplify`) and
 rendered (`colmo.render`) on its first held-out episode, into the run directory; with
 `evaluation.robustness`, before that, scored over a grid of model-mismatch magnitudes
 (`colmo.robustness`: robustness.json/.csv/.png, a few numbers in the summary). Each step is
@@ -31,8 +31,8 @@ from typing import Optional
 
 from colmo.config import SearchConfig
 from colmo.errors import RunError
-from colmo.evaluate import heldout_evaluator, heldout_score
 from colmo.evaluation import CANCELLED, Evaluator, Executor
+from colmo.heldout import heldout_evaluator, heldout_score
 from colmo.record import EVALUATED, SampleRecord
 from colmo.robustness import grid_points, perturbed, robustness_report, save
 from colmo.store import SIMPLIFIED_POLICY_FILE, ProgramStore

@@ -66,8 +66,8 @@ policy.step = 0
 @pytest.fixture(scope="module")
 def pendulum():
     """Three sandbox workers and the pendulum's calibrated evaluator (10 training episodes)."""
-    from colmo.evaluate import task_evaluator
     from colmo.executor import LocalExecutor
+    from colmo.heldout import task_evaluator
 
     cfg = compose("optimize", "task=pendulum", "gfo=oneplusone", "policy_file=unused.py")
     with LocalExecutor(3) as executor:

@@ -128,8 +128,8 @@ def test_a_raced_out_candidate_never_becomes_the_best():
 @pytest.fixture(scope="module")
 def pendulum():
     """Two sandbox workers, the pendulum's calibrated evaluator and the mistuned example program."""
-    from colmo.evaluate import task_evaluator
     from colmo.executor import LocalExecutor
+    from colmo.heldout import task_evaluator
     from colmo.intake import read_policy_file
 
     cfg = compose("optimize", "task=pendulum", "gfo=oneplusone", "policy_file=unused.py")

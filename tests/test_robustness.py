@@ -112,7 +112,7 @@ def test_colmo_evaluate_robustness_reports_each_magnitude_nominal_first_and_repe
     )
     results = []
     for _ in range(2):
-        run = run_colmo("colmo.evaluate", *overrides, cwd=tmp_path, timeout=600)
+        run = run_colmo("colmo.heldout", *overrides, cwd=tmp_path, timeout=600)
         assert run.returncode == 0, run.stderr[-2000:]
         results.append(last_json_line(run.stdout))
     first, second = results

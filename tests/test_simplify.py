@@ -566,8 +566,8 @@ def executor():
 
 @pytest.fixture(scope="module")
 def evaluators():
-    from colmo.evaluate import heldout_evaluator
     from colmo.evaluation import Evaluator
+    from colmo.heldout import heldout_evaluator
 
     spec = load_spec("pendulum.py")
     train = Evaluator.for_task(spec, SHORT, episode_seeds(0, 2), memory_mb=1024, timeout_s=120.0)

@@ -13,7 +13,15 @@ groups that pick a component: `gfo`, `executor`, `tracker`), `generators` (`llm`
 (database, search loop, held-out evaluation, simplifier) and `apps` (each app's root schema).
 """
 
-from colmo.config.apps import OptimizeConfig, SearchConfig
+from colmo.config.apps import (
+    EvaluateConfig,
+    OptimizeConfig,
+    PolicyFileConfig,
+    RenderConfig,
+    ReportConfig,
+    SearchConfig,
+    SimplifyAppConfig,
+)
 from colmo.config.components import (
     BOConfig,
     ExecutorConfig,
@@ -39,6 +47,7 @@ __all__ = [
     "PROMPT_FORMATS",
     "BOConfig",
     "DatabaseConfig",
+    "EvaluateConfig",
     "ExecutorConfig",
     "GFOConfig",
     "GeneratorConfig",
@@ -50,9 +59,13 @@ __all__ = [
     "OpenAIConfig",
     "OptimizeConfig",
     "PerturbConfig",
+    "PolicyFileConfig",
     "RayExecutorConfig",
+    "RenderConfig",
+    "ReportConfig",
     "SearchConfig",
     "SearchLoopConfig",
+    "SimplifyAppConfig",
     "SimplifyConfig",
     "TaskConfig",
     "TrackerConfig",

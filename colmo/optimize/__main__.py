@@ -14,47 +14,32 @@ spread.
 
 from __future__ import annotations
 
-import json
 import logging
 import sys
 import time
-from pathlib import Path
-
-from hydra.core.hydra_config import HydraConfig
 
 from colmo.cli import hydra_app
 from colmo.config import OptimizeConfig
-from colmo.evaluate import heldout_evaluator, heldout_score, task_evaluator
-from colmo.executor import make_executor
-from colmo.intake import read_policy_file
+from colmo.heldout import heldout_score
 from colmo.optimize.tune import CandidateEvaluator, optimize_program
+from colmo.policy_tools import check_policy_file, policy_session, print_result, write_result
 from colmo.record import finite_or_none
-from colmo.specs import load_task_spec
 
 log = logging.getLogger("colmo.optimize")
 
 
-def check_inputs(cfg: OptimizeConfig) -> None:
-    """The spec file loads and the policy file holds a usable policy."""
-    read_policy_file(cfg.policy_file, load_task_spec(cfg.task.spec).allowed_imports)
-
-
-@hydra_app("optimize", check=check_inputs)
+@hydra_app("optimize", check=check_policy_file)
 def main(cfg: OptimizeConfig) -> None:
     """Tune the constants of one policy file with a gradient-free optimizer."""
     started = time.time()
-    executor = make_executor(cfg.executor)
-    try:
-        spec, evaluator = task_evaluator(cfg.task, cfg.executor, executor, cfg.seed)
-        program = read_policy_file(cfg.policy_file, spec.allowed_imports)
+    with policy_session(cfg) as session:
+        executor, evaluator, program = session.executor, session.evaluator, session.program
         log.info("%s: %d parameters, gfo=%s budget=%d, %d episodes", cfg.policy_file, program.n_params, cfg.gfo.method, cfg.gfo.budget, len(evaluator.seeds))
         chunks = max(1, executor.n_workers // cfg.gfo.workers)
         result = optimize_program(program, CandidateEvaluator(executor, evaluator, program.skeleton, chunks), cfg.gfo, cfg.seed)
         heldout = None
         if not result.failure:
-            heldout = heldout_score(executor, heldout_evaluator(evaluator, cfg.seed, cfg.evaluation.episodes), program.skeleton, result.params)
-    finally:
-        executor.close()
+            heldout = heldout_score(executor, session.heldout(cfg.evaluation.episodes), program.skeleton, result.params)
 
     print(f"score with its own constants: {result.initial.score:.2f}" + (f" (failed: {result.initial.failure})" if result.initial.failure else ""))
     heldout_value = finite_or_none(heldout.score) if heldout else None
@@ -70,18 +55,15 @@ def main(cfg: OptimizeConfig) -> None:
         "heldout_episodes": cfg.evaluation.episodes, "returns": list(result.evaluation.returns), "params": list(result.params),
         "failure": result.failure, "code": result.code,
     }
-    output_dir = Path(HydraConfig.get().runtime.output_dir)
-    (output_dir / "result.json").write_text(json.dumps(summary, indent=2))
     header = f"# tuned by colmo-optimize (gfo={cfg.gfo.method}): training score {result.score:.2f}"
     header += f", held-out {heldout_value:.2f}\n" if heldout_value is not None else "\n"
-    (output_dir / "tuned_policy.py").write_text(header + result.code + "\n")
-    print(f"wrote {output_dir / 'tuned_policy.py'} and {output_dir / 'result.json'}", file=sys.stderr)
+    written = write_result(summary, "tuned_policy.py", header + result.code + "\n")
     if cfg.tracker.name == "mlflow":
         from colmo.track import track_optimize
 
-        run_id = track_optimize(cfg, summary, [output_dir / "tuned_policy.py", output_dir / "result.json"], started)
+        run_id = track_optimize(cfg, summary, written, started)
         print(f"MLflow run {run_id} (experiment {cfg.tracker.experiment or cfg.task.name})", file=sys.stderr)
-    print(json.dumps(summary))
+    print_result(summary)
     if result.failure:
         print(f"colmo: the policy failed: {result.failure}", file=sys.stderr)
         sys.exit(1)

@@ -90,7 +90,7 @@ def render_policy(
     video_seconds: Optional[float] = None,
 ) -> EpisodeMedia:
     """The plot and video (`render_episode`) of episode `evaluator.seeds[episode]` of a program,
-    recorded by the referee (pass a held-out evaluator: `colmo.evaluate.heldout_evaluator`),
+    recorded by the referee (pass a held-out evaluator: `colmo.heldout.heldout_evaluator`),
     cut to `steps` control steps if given, its video's frames drawn in about `video_seconds`
     if given (`render_video`). Never raises for a missing OpenGL, a policy that
     fails in the episode or an invalid trace: then `note` says why, and `plot` is None where

@@ -11,51 +11,17 @@ and says where. `simplify.tolerance` is the share of the training score a deleti
 
 from __future__ import annotations
 
-import json
 import logging
-import sys
-from dataclasses import dataclass, field
 from pathlib import Path
 
-from hydra.core.hydra_config import HydraConfig
-from omegaconf import MISSING
-
-from colmo.cli import SCHEMAS, hydra_app
-from colmo.config import ExecutorConfig, GFOConfig, HeldoutConfig, SimplifyConfig, TaskConfig, option
-from colmo.errors import ConfigError
-from colmo.evaluate import heldout_evaluator, task_evaluator
+from colmo.cli import hydra_app
+from colmo.config import SimplifyAppConfig
 from colmo.extract import extract_policy
-from colmo.intake import read_policy_file
+from colmo.policy_tools import check_policy_file, policy_session, print_result, write_result
 from colmo.simplify.greedy import SimplifyResult
 from colmo.simplify.sandboxed import simplify_program
-from colmo.specs import load_task_spec
 
 log = logging.getLogger("colmo.simplify")
-
-
-@dataclass
-class SimplifyAppConfig:
-    """`colmo-simplify`: shorten a policy file, every step measured by the referee."""
-
-    task: TaskConfig = MISSING
-    gfo: GFOConfig = MISSING
-    executor: ExecutorConfig = MISSING
-    policy_file: str = option(MISSING, "a .py file with `def policy(obs)`, or a raw language-model answer")
-    simplify: SimplifyConfig = field(default_factory=SimplifyConfig)
-    evaluation: HeldoutConfig = field(default_factory=HeldoutConfig)
-    seed: int = option(0, "episode seeds (training and held-out) and the optimizer's randomness derive from it")
-
-    def __post_init__(self) -> None:
-        if self.seed < 0:
-            raise ConfigError(f"seed must be >= 0, got {self.seed}")
-
-
-SCHEMAS[(None, "simplify_schema")] = SimplifyAppConfig
-
-
-def check_inputs(cfg: SimplifyAppConfig) -> None:
-    """The spec file loads and the policy file holds a usable policy."""
-    read_policy_file(cfg.policy_file, load_task_spec(cfg.task.spec).allowed_imports)
 
 
 def _score(value: float) -> str:
@@ -78,43 +44,33 @@ def _report(result: SimplifyResult, episodes: int, heldout_episodes: int) -> str
     return "\n".join(lines)
 
 
-@hydra_app("simplify", check=check_inputs)
+@hydra_app("simplify", check=check_policy_file)
 def main(cfg: SimplifyAppConfig) -> None:
     """Delete dead code and each part that costs at most simplify.tolerance of the score, then re-tune."""
-    from colmo.executor import make_executor
-
-    text = Path(cfg.policy_file).expanduser().read_text(errors="replace")
-    executor = make_executor(cfg.executor)
-    try:
-        spec, evaluator = task_evaluator(cfg.task, cfg.executor, executor, cfg.seed)
-        code = extract_policy(text)
-        heldout = heldout_evaluator(evaluator, cfg.seed, cfg.evaluation.episodes)
+    code = extract_policy(Path(cfg.policy_file).expanduser().read_text(errors="replace"))
+    with policy_session(cfg) as session:
+        evaluator, heldout = session.evaluator, session.heldout(cfg.evaluation.episodes)
         log.info(
             "%s: simplifying with tolerance %g on %d training and %d held-out episodes, gfo=%s",
             cfg.policy_file, cfg.simplify.tolerance, len(evaluator.seeds), len(heldout.seeds), cfg.gfo.method,
         )
         result = simplify_program(
-            executor, evaluator, heldout, code, cfg.gfo, cfg.simplify.tolerance, cfg.seed, cfg.simplify.max_rounds, cfg.simplify.batch_size
+            session.executor, evaluator, heldout, code, cfg.gfo, cfg.simplify.tolerance, cfg.seed, cfg.simplify.max_rounds, cfg.simplify.batch_size
         )
-    finally:
-        executor.close()
 
     print(_report(result, len(evaluator.seeds), len(heldout.seeds)))
     summary = result.to_json() | {
         "task": cfg.task.name, "policy_file": cfg.policy_file, "tolerance": cfg.simplify.tolerance, "gfo": cfg.gfo.method,
         "episodes": len(evaluator.seeds), "heldout_episodes": len(heldout.seeds), "seed": cfg.seed,
     }
-    output_dir = Path(HydraConfig.get().runtime.output_dir)
-    (output_dir / "result.json").write_text(json.dumps(summary, indent=2))
     header = (
         f"# simplified by colmo-simplify (tolerance {cfg.simplify.tolerance:g}, gfo={cfg.gfo.method}) from {cfg.policy_file}:\n"
         f"# training score {_score(result.scores_initial.train)} -> {_score(result.scores.train)}, "
         f"held-out {_score(result.scores_initial.heldout)} -> {_score(result.scores.heldout)}; "
         f"{result.size_initial.nodes} -> {result.size.nodes} AST nodes\n"
     )
-    (output_dir / "simplified_policy.py").write_text(header + result.code + "\n")
-    print(f"wrote {output_dir / 'simplified_policy.py'} and {output_dir / 'result.json'}", file=sys.stderr)
-    print(json.dumps(summary))
+    write_result(summary, "simplified_policy.py", header + result.code + "\n")
+    print_result(summary)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,57 @@
+"""Held-out scoring: a program's score on fresh episodes, and the task evaluator it starts from.
+
+A search selects programs by their score on the training episodes, so that score flatters the
+winner. A held-out score is the referee's mean return over `episodes` other episodes, whose
+seeds come from their own stream of the run seed and never coincide with a training seed
+(`colmo.rollout.heldout_seeds`): the paper reports 1000 such episodes for the pendulum and the
+ball-in-cup. The end of a search (`colmo.finish`) scores its best programs this way,
+`colmo-optimize` its tuned policy, and `colmo-evaluate` (`colmo.heldout.__main__`) any policy
+file, with the robustness report of `robustness_of` on request. A library: it imports no
+front end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Optional
+
+from colmo.config import EvaluateConfig, ExecutorConfig, PerturbConfig, TaskConfig
+from colmo.environments.perturb import with_perturbation
+from colmo.evaluation import Evaluation, Evaluator, Executor
+from colmo.optimize.tune import CandidateEvaluator, calibrated
+from colmo.program import ParametricProgram, parametrize
+from colmo.robustness import RobustnessReport, perturbed, robustness_report
+from colmo.rollout import episode_seeds, heldout_seeds
+from colmo.specs import Spec, load_task_spec
+
+
+def heldout_evaluator(evaluator: Evaluator, seed: int, episodes: int) -> Evaluator:
+    """`evaluator` on `episodes` held-out episodes of run seed `seed` (time limit scaled)."""
+    seeds = heldout_seeds(seed, episodes, evaluator.seeds)
+    scale = max(len(seeds) / len(evaluator.seeds), 1.0)
+    return replace(evaluator, seeds=tuple(seeds), referee_timeout_s=evaluator.referee_timeout_s * scale)
+
+
+def heldout_score(executor: Executor, evaluator: Evaluator, skeleton: str, params: tuple[float, ...], timeout_s: Optional[float] = None) -> Evaluation:
+    """The referee's evaluation of one program on `evaluator`'s (held-out) episodes, spread over
+    the executor's workers; each part limited to `timeout_s` if given."""
+    return CandidateEvaluator(executor, evaluator, skeleton, executor.n_workers).referee(params, timeout_s)
+
+
+def task_evaluator(task: TaskConfig, executor_cfg: ExecutorConfig, executor: Executor, seed: int) -> tuple[Spec, Evaluator]:
+    """The spec of a configured task and its evaluator on the training episodes of `seed`, with
+    time limits calibrated on the spec's starter policy."""
+    spec = load_task_spec(task.spec)
+    provisional = Evaluator.for_task(spec, with_perturbation(task.env, task.perturb), episode_seeds(seed, task.episodes), executor_cfg.memory_mb)
+    return spec, calibrated(executor, provisional, parametrize(spec.starter_code), executor_cfg.timeout_s)
+
+
+def robustness_of(executor: Executor, evaluator: Evaluator, program: ParametricProgram, cfg: EvaluateConfig) -> RobustnessReport:
+    """The robustness report of `program` on `cfg.robustness_episodes` held-out episodes, every
+    grid point scored by the referee with the task's options plus that point's perturbation."""
+    heldout = heldout_evaluator(evaluator, cfg.seed, cfg.robustness_episodes)
+
+    def score(perturb: PerturbConfig) -> Evaluation:
+        return heldout_score(executor, perturbed(heldout, perturb), program.skeleton, program.values)
+
+    return robustness_report(score, cfg.robustness_magnitudes, cfg.robustness_delays)

@@ -1,0 +1,52 @@
+"""`colmo-evaluate task=... policy_file=... [episodes=100]` (or `python -m colmo.heldout`): score
+one policy file on held-out episodes (`colmo.heldout`).
+
+    colmo-evaluate task=pendulum policy_file=best_policy.py episodes=1000
+
+Its last stdout line is a JSON object (`score`, `episodes`, `returns`, ...); a policy that
+fails exits 1. With `robustness=true` it also scores the policy under model mismatch
+(`colmo.robustness`) on `robustness_episodes` held-out episodes per grid point, prints the
+table, writes `robustness.{json,csv,png}` into the run directory and adds `robustness` (one
+entry per magnitude, nominal first) and `delay` to the JSON line.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from colmo.cli import hydra_app
+from colmo.config import EvaluateConfig
+from colmo.heldout import heldout_score, robustness_of
+from colmo.policy_tools import check_policy_file, policy_session, print_result, run_directory
+from colmo.record import finite_or_none
+from colmo.robustness import save, table
+
+
+@hydra_app("evaluate", check=check_policy_file)
+def main(cfg: EvaluateConfig) -> None:
+    """Score a policy file with the referee on fresh episodes of the task."""
+    with policy_session(cfg) as session:
+        program = session.program
+        evaluation = heldout_score(session.executor, session.heldout(cfg.episodes), program.skeleton, program.values)
+        report = robustness_of(session.executor, session.evaluator, program, cfg) if cfg.robustness else None
+    print(f"held-out score over {cfg.episodes} episodes: " + (f"{evaluation.score:.2f}" if not evaluation.failure else f"failed: {evaluation.failure}"))
+    result = {
+        "task": cfg.task.name, "policy_file": cfg.policy_file, "episodes": cfg.episodes, "seed": cfg.seed,
+        "score": finite_or_none(evaluation.score), "returns": list(evaluation.returns), "failure": evaluation.failure,
+        "seconds": round(evaluation.seconds, 3),
+    }
+    if report is not None:
+        print(f"robustness over {cfg.robustness_episodes} held-out episodes per point:\n{table(report)}")
+        for failure in report.failures():
+            print(f"  failed: {failure}")
+        paths = save(report, run_directory(), f"{cfg.task.name}: {Path(cfg.policy_file).name}")
+        print("wrote " + ", ".join(str(path) for path in paths))
+        result |= {"robustness_episodes": cfg.robustness_episodes, "robustness": report.entries(), "delay": report.delay_entries()}
+    print_result(result)
+    if evaluation.failure:
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()
