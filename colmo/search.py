@@ -215,7 +215,7 @@ class Search:
         return to_evaluate
 
     def _wants_probe(self) -> bool:
-        return self.generator is None and getattr(GENERATORS.get(self.cfg.llm.name), "wants_probe", False)
+        return self.generator is None and GENERATORS[self.cfg.llm.name].wants_probe
 
     def _start_generator(self) -> None:
         """The generator of `cfg.llm` (unless one was given); one that cannot start is a

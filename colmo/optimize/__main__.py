@@ -24,6 +24,7 @@ from colmo.heldout import heldout_score
 from colmo.optimize.tune import CandidateEvaluator, optimize_program
 from colmo.policy_tools import check_policy_file, policy_session, print_result, write_result
 from colmo.record import finite_or_none
+from colmo.trackers import make_tracker
 
 log = logging.getLogger("colmo.optimize")
 
@@ -58,11 +59,9 @@ def main(cfg: OptimizeConfig) -> None:
     header = f"# tuned by colmo-optimize (gfo={cfg.gfo.method}): training score {result.score:.2f}"
     header += f", held-out {heldout_value:.2f}\n" if heldout_value is not None else "\n"
     written = write_result(summary, "tuned_policy.py", header + result.code + "\n")
-    if cfg.tracker.name == "mlflow":
-        from colmo.track import track_optimize
-
-        run_id = track_optimize(cfg, summary, written, started)
-        print(f"MLflow run {run_id} (experiment {cfg.tracker.experiment or cfg.task.name})", file=sys.stderr)
+    where = make_tracker(cfg.tracker).record_optimize(cfg, summary, written, started)
+    if where:
+        print(where, file=sys.stderr)
     print_result(summary)
     if result.failure:
         print(f"colmo: the policy failed: {result.failure}", file=sys.stderr)
