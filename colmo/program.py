@@ -58,6 +58,7 @@ from colmo.astutil import (
 )
 
 PARAMS_NAME = "params"
+DISPLAY_DIGITS = 4  # significant digits of the constants in the code a person reads
 
 # Callees whose integer arguments are shapes, counts, indices or digits (matched by last name).
 _INTEGER_CALLS = frozenset({
@@ -133,13 +134,15 @@ def instantiate(skeleton: str, values: Sequence[float], digits: int | None = Non
 
     digits=None writes each value's repr, so running the result is bit-identical to running the
     skeleton with `params = values`; digits=4 rounds to 4 significant digits for display
-    (9.437, -12.24, 0.0004321, 1234.0)."""
+    (9.437, -12.24, 0.0004321, 1234.0: `round_significant`)."""
+    if digits is not None:
+        values = round_significant(values, digits)
     tree = _parse(skeleton)
     slots = [node for node in ast.walk(tree) if _is_slot(node)]
     needed = 1 + max((slot.slice.value for slot in slots), default=-1)
     if needed != len(values):
         raise ProgramError(f"skeleton takes {needed} parameters, got {len(values)} values")
-    literals = {id(slot): _literal(values[slot.slice.value], digits) for slot in slots}
+    literals = {id(slot): number_literal(float(values[slot.slice.value])) for slot in slots}
     return ast.unparse(replace_nodes(tree, literals))
 
 
@@ -371,8 +374,6 @@ def _is_slot(node: ast.AST) -> bool:
     )
 
 
-def _literal(value: float, digits: int | None) -> ast.expr:
-    value = float(value)
-    if digits is not None:
-        value = float(f"{value:.{digits}g}")
-    return number_literal(value)
+def round_significant(values: Sequence[float], digits: int = DISPLAY_DIGITS) -> tuple[float, ...]:
+    """`values` rounded to `digits` significant digits, as `instantiate` writes them for display."""
+    return tuple(float(f"{v:.{digits}g}") for v in values)

@@ -44,7 +44,7 @@ import numpy as np
 from colmo.config import MutateConfig
 from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, logger
 from colmo.generate.operators import CROSSOVERS, MUTATIONS, Pieces, policy_function
-from colmo.program import ProgramError, instantiate, parametrize
+from colmo.program import DISPLAY_DIGITS, ProgramError, instantiate, parametrize
 from colmo.prompt import Prompt
 
 _OBS_SIZE = re.compile(r"obs\w*\s*(?:size is|\(size)\s*(\d+)", re.IGNORECASE)
@@ -142,4 +142,4 @@ class MutateGenerator(Generator):
     def _perturbed(self, parent: _Parent) -> str:
         program = parametrize(parent.code)
         values = np.array(program.values) * (1.0 + self.cfg.constant_sigma * self.rng.standard_normal(program.n_params))
-        return instantiate(program.skeleton, values, digits=4) + "\n"
+        return instantiate(program.skeleton, values, digits=DISPLAY_DIGITS) + "\n"

@@ -30,13 +30,12 @@ import numpy as np
 from colmo.errors import ConfigError
 from colmo.evaluation import FAST, REFEREE, Evaluation, Evaluator, Executor
 from colmo.optimize.methods import METHODS
-from colmo.program import ParametricProgram, ProgramSize, instantiate, measure
+from colmo.program import DISPLAY_DIGITS, ParametricProgram, ProgramSize, instantiate, measure, round_significant
 from colmo.racing import Race
 
 if TYPE_CHECKING:
     from colmo.config import GFOConfig
 
-DISPLAY_DIGITS = 4
 TIMEOUT_FLOOR_S = 10.0
 TIMEOUT_FACTOR = 30.0
 # Relative difference between a fast-path and a referee score beyond which the fast path was
@@ -53,16 +52,15 @@ class CandidateEvaluator:
         self.executor = executor
         self.evaluator = evaluator
         self.skeleton = skeleton
-        self.chunks = [list(chunk) for chunk in np.array_split(np.arange(len(evaluator.seeds)), max(1, min(episode_chunks, len(evaluator.seeds))))]
+        self.chunks = evaluator.seed_chunks(episode_chunks)
 
     def fast(self, params_list: Sequence[Sequence[float]], race: Optional[Race] = None) -> list[Evaluation]:
         """Each vector's fast-path evaluation. With `race` (its `incumbent` over all seeds) the
         episodes of a candidate run in order in one request, so that racing sees them all and
         the result does not depend on how many workers there are; without, they are split."""
-        seeds = self.evaluator.seeds
-        chunks = [list(range(len(seeds)))] if race else self.chunks
+        chunks = self.evaluator.seed_chunks(1) if race else self.chunks
         requests = [
-            self.evaluator.request(self.skeleton, params, seeds=tuple(seeds[i] for i in chunk), mode=FAST, race=race)
+            self.evaluator.request(self.skeleton, params, seeds=chunk, mode=FAST, race=race)
             for params in params_list
             for chunk in chunks
         ]
@@ -72,9 +70,8 @@ class CandidateEvaluator:
     def referee(self, params: Sequence[float], timeout_s: Optional[float] = None) -> Evaluation:
         """The referee's evaluation of one vector over all the seeds (split over
         `episode_chunks` requests), each request limited to `timeout_s` if given."""
-        seeds = self.evaluator.seeds
         requests = [
-            self.evaluator.request(self.skeleton, params, seeds=tuple(seeds[i] for i in chunk), mode=REFEREE, timeout_s=timeout_s)
+            self.evaluator.request(self.skeleton, params, seeds=chunk, mode=REFEREE, timeout_s=timeout_s)
             for chunk in self.chunks
         ]
         return Evaluation.joined(self.executor.evaluate(requests))
@@ -132,10 +129,6 @@ def _told(evaluation: Evaluation, race: Optional[Race]) -> Optional[float]:
     if evaluation.failure:
         return None
     return race.estimate(evaluation.returns) if evaluation.raced_out and race else evaluation.score
-
-
-def round_significant(values: Sequence[float], digits: int = DISPLAY_DIGITS) -> tuple[float, ...]:
-    return tuple(float(f"{v:.{digits}g}") for v in values)
 
 
 @dataclass(frozen=True)

@@ -24,8 +24,6 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
-import numpy as np
-
 from colmo.errors import RunError
 from colmo.evaluation import REFEREE, Evaluation, Evaluator, Executor
 from colmo.intake import Unusable, read_program
@@ -58,9 +56,8 @@ class RefereeScores:
 
     def __call__(self, codes: Sequence[str]) -> list[float]:
         programs = {code: program for code in codes if (program := self._read(code)) is not None}
-        seeds = self.evaluator.seeds
-        parts = max(1, min(len(seeds), math.ceil(self.executor.n_workers / max(1, len(programs)))))
-        chunks = [tuple(int(seeds[i]) for i in chunk) for chunk in np.array_split(np.arange(len(seeds)), parts)]
+        chunks = self.evaluator.seed_chunks(math.ceil(self.executor.n_workers / max(1, len(programs))))
+        parts = len(chunks)
         requests = [
             self.evaluator.request(program.skeleton, program.values, seeds=chunk, mode=REFEREE)
             for program in programs.values()
@@ -114,10 +111,10 @@ def simplify_program(
     and `stop()` (a search's deadline) cut the greedy search short, keeping the best program so
     far.
 
-    A search calls it on its best program at the end, before closing its executor:
-    `simplify_program(executor, evaluator, heldout_evaluator(evaluator, cfg.seed,
-    cfg.evaluation.episodes), best_code, cfg.gfo, tolerance, cfg.seed, stop=past_deadline)`;
-    `result.to_json()` has what a summary reports and `result.code` is the simplified policy.
+    Its callers: the finish of a search, on its best program before the executor closes, with
+    `stop` at the finish's deadline (`colmo.finish`), and `colmo-simplify` on a policy file
+    (`colmo.simplify.__main__`); `result.to_json()` has what a summary reports and
+    `result.code` is the simplified policy.
 
     Raises RunError if the program fails on the training episodes (nothing to keep)."""
     train = RefereeScores(executor, train_evaluator)
