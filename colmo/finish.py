@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -139,6 +140,7 @@ def finish(
     """Held-out scores of the top programs (stored with them), then the best one simplified and
     rendered, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`."""
     best = BestPrograms()
+    warming = _warm_up_render() if cfg.evaluation.render else None
     plan = plan_finish(cfg, episode_seconds, executor.n_workers, max(_left(until), 0.0))
     if plan.reduced:
         log.warning("finishing in %.0f s: %s", max(_left(until), 0.0), plan.describe(cfg))
@@ -178,10 +180,22 @@ def finish(
         if not best.heldout or simplify_until - time.monotonic() < 2 * best_took:
             log.warning("no time left to simplify the best policy (search.max_seconds)")
         else:
-            best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until, plan.reduced)
+            # What is being scored when it stops still ends: about two such measurements.
+            best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until - 2 * best_took, plan.reduced)
     if cfg.evaluation.render:
+        warming.join(max(_left(until), 0.0))
         best.media = _render(cfg, executor, heldout, top[0], run_dir, until, plan)
     return best
+
+
+def _warm_up_render() -> threading.Thread:
+    """`colmo.render.warm_up` in a thread, done while the held-out scores and the simplification
+    wait on the workers (a thread: the imports and the GL probe are this process's)."""
+    from colmo.render import warm_up
+
+    thread = threading.Thread(target=warm_up, name="colmo-render-warm-up", daemon=True)
+    thread.start()
+    return thread
 
 
 def _robustness(cfg: SearchConfig, executor: Executor, evaluator: Evaluator, record: SampleRecord, run_dir: Path) -> dict:
