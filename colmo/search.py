@@ -235,9 +235,7 @@ class Search:
 
     def _prompt(self, retry: int = 0) -> Prompt:
         """A prompt from a new selection of the database; `retry`: the regeneration of a duplicate it is for."""
-        prompt = build_prompt(
-            self.spec.description, self.database.select(), constants_tuned=self.cfg.gfo.tunes_constants, allowed_imports=self.spec.allowed_imports,
-        )
+        prompt = build_prompt(self.spec.description, self.database.select(), constants_tuned=self.cfg.gfo.tunes_constants)
         return dataclasses.replace(prompt, retry=retry)
 
     def _generate(self) -> Optional[_Batch]:
