@@ -23,9 +23,11 @@ import ast
 import copy
 import math
 from dataclasses import dataclass
+from typing import Sequence
 
 from colmo.astutil import bound_names, is_docstring, rename
 from colmo.database import Selection
+from colmo.specs import DEFAULT_IMPORTS
 
 NUMPY_IMPORT = "import numpy as np"
 # Where a completion of the prompt text ends: the next top-level statement after the function.
@@ -45,7 +47,7 @@ class Prompt:
     retry: int = 0
 
 
-def _system_message(function_name: str, args: str, constants_tuned: bool) -> str:
+def _system_message(function_name: str, args: str, constants_tuned: bool, allowed_imports: Sequence[str]) -> str:
     tuning = (
         " Its numeric constants are tuned automatically by an optimizer afterwards, so change the "
         "structure (which terms, conditions and functions of the observation it uses), not the values."
@@ -54,8 +56,14 @@ def _system_message(function_name: str, args: str, constants_tuned: bool) -> str
     return (
         "You are an expert control engineer who writes control policies as short Python functions. "
         f"Answer with one Python function `{function_name}({args})` in a ```python code block. "
-        f"numpy is available as np; use only numpy and math. Write a new policy, not a copy of one shown.{tuning}"
+        f"numpy is available as np; use only {_listed(allowed_imports)}. Write a new policy, not a copy of one shown.{tuning}"
     )
+
+
+def _listed(names: Sequence[str]) -> str:
+    """`numpy`, `numpy and math`, `numpy, math and scipy`."""
+    names = list(dict.fromkeys(names))
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
 
 
 def _instructions(new: str, previous: str, function_name: str, constants_tuned: bool) -> str:
@@ -69,9 +77,13 @@ def _instructions(new: str, previous: str, function_name: str, constants_tuned: 
     return "\n".join(lines)
 
 
-def build_prompt(description: str, selection: Selection, function_name: str = "policy", constants_tuned: bool = False) -> Prompt:
+def build_prompt(
+    description: str, selection: Selection, function_name: str = "policy", constants_tuned: bool = False,
+    allowed_imports: Sequence[str] = DEFAULT_IMPORTS,
+) -> Prompt:
     """The prompt showing `selection.programs` (ascending score) as `{function_name}_v0..`;
-    `constants_tuned`: whether the run tunes the constants of what the model writes (GFO)."""
+    `constants_tuned`: whether the run tunes the constants of what the model writes (GFO);
+    `allowed_imports`: the modules the task's static check lets a policy import (`Spec.allowed_imports`)."""
     programs = selection.programs
     assert programs, "a prompt shows at least one program"
     assert all(math.isfinite(program.score) for program in programs), "failed programs are never shown"
@@ -88,7 +100,7 @@ def build_prompt(description: str, selection: Selection, function_name: str = "p
         f"Name it `{function_name}` in your answer."
     )
     messages = [
-        {"role": "system", "content": _system_message(function_name, args, constants_tuned)},
+        {"role": "system", "content": _system_message(function_name, args, constants_tuned, allowed_imports)},
         {"role": "user", "content": f"```python\n{context}\n```\n\n{request}"},
     ]
     return Prompt(

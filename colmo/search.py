@@ -235,7 +235,9 @@ class Search:
 
     def _prompt(self, retry: int = 0) -> Prompt:
         """A prompt from a new selection of the database; `retry`: the regeneration of a duplicate it is for."""
-        prompt = build_prompt(self.spec.description, self.database.select(), constants_tuned=self.cfg.gfo.tunes_constants)
+        prompt = build_prompt(
+            self.spec.description, self.database.select(), constants_tuned=self.cfg.gfo.tunes_constants, allowed_imports=self.spec.allowed_imports,
+        )
         return dataclasses.replace(prompt, retry=retry)
 
     def _generate(self) -> Optional[_Batch]:

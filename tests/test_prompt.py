@@ -244,3 +244,14 @@ def test_only_a_run_that_tunes_constants_says_so_in_both_forms():
     assert "optimizer" in tuned_system and "structure" in tuned_system and "tuned" in tuned_system
     assert "optimizer" not in plain_system and "tuned" not in plain_system and "structure" not in plain_system
     assert tuning.strip() in tuned_user and "tuned" not in plain_user
+
+
+def test_the_chat_form_names_the_imports_the_task_allows():
+    """The system message names what the static check lets the task's policies import: numpy and
+    math by default, and a spec's `ALLOWED_IMPORTS` besides."""
+    default, wider = (
+        build_prompt(DESCRIPTION, Selection(2, [LOW, HIGH]), **options).messages[0]["content"]
+        for options in ({}, {"allowed_imports": ("numpy", "math", "scipy")})
+    )
+    assert "use only numpy and math." in default
+    assert "use only numpy, math and scipy." in wider
