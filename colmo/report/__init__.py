@@ -47,12 +47,12 @@ from mlflow import MlflowClient
 from colmo.report.figure import figure
 from colmo.report.selection import AXES, LATEST, group, read_runs
 from colmo.report.tables import best_policies, generation_table, left_out_lines, mean_std, runs_table, table_one
+from colmo.store import BEST_SO_FAR_PLOT
 from colmo.track import connect, default_tracking_uri, sqlite_path
 
 __all__ = ["AXES", "default_out", "main", "mean_std", "read_runs", "write_report"]
 
 REPORT_FILE = "report.md"
-PLOT_FILE = "best_so_far.png"
 
 
 def default_out(experiments: Sequence[str], now: Optional[datetime.datetime] = None) -> Path:
@@ -74,7 +74,7 @@ def write_report(
     if not tasks:
         raise ValueError(f"no finished runs with metrics in experiment(s) {', '.join(experiments)}")
     out.mkdir(parents=True, exist_ok=True)
-    figure(tasks, axis).savefig(out / PLOT_FILE, dpi=130)
+    figure(tasks, axis).savefig(out / BEST_SO_FAR_PLOT, dpi=130)
     count = len(reading.curves)
     lines = [
         f"# colmo report: {', '.join(experiments)}",
@@ -95,7 +95,7 @@ def write_report(
         "",
         "## Best so far",
         "",
-        f"![best-so-far curves]({PLOT_FILE})",
+        f"![best-so-far curves]({BEST_SO_FAR_PLOT})",
         "",
         f"x: {AXES[axis][1]}. One colour per variant (legend): thick, the mean over seeds; band, lowest to highest seed; "
         "thin, each seed; a marker, a run of one batch.",

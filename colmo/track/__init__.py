@@ -11,11 +11,11 @@
 
 from colmo.track.backend import CLASSIC_ML, EXPERIMENT_KIND_TAG, VIEW_TAG, connect, default_tracking_uri, open_experiment, retry_locked, sqlite_path, ui_path
 from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE
-from colmo.track.runs import PLOT_FILE, MlflowTracker, TrackedRun, draw_best_so_far, flatten, start_run, start_search_run, track_optimize
+from colmo.track.runs import MlflowTracker, TrackedRun, draw_best_so_far, flatten, start_run, start_search_run, track_optimize
 from colmo.track.sweep import SWEEP_TAG
 
 __all__ = [
-    "CLASSIC_ML", "EXPERIMENT_KIND_TAG", "PLOT_FILE", "PROGRAM_COLUMNS", "PROGRAMS_PAGE", "PROGRAMS_TABLE", "SWEEP_TAG",
+    "CLASSIC_ML", "EXPERIMENT_KIND_TAG", "PROGRAM_COLUMNS", "PROGRAMS_PAGE", "PROGRAMS_TABLE", "SWEEP_TAG",
     "VIEW_TAG", "MlflowTracker", "TrackedRun", "connect", "default_tracking_uri", "draw_best_so_far", "flatten",
     "open_experiment", "retry_locked", "sqlite_path", "start_run", "start_search_run", "track_optimize", "ui_path",
 ]

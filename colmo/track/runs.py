@@ -59,14 +59,13 @@ from mlflow.utils.mlflow_tags import MLFLOW_LOGGED_ARTIFACTS, MLFLOW_PARENT_RUN_
 
 from colmo.config import OptimizeConfig, SearchConfig
 from colmo.record import BatchReport, SampleRecord, Summary
-from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
+from colmo.store import BEST_POLICY_FILE, BEST_SO_FAR_PLOT, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
 from colmo.track.backend import FAILED, FINISHED, KILLED, default_tracking_uri, log_metrics, log_params, open_experiment, retry_locked, sqlite_path, ui_path
 from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE, program_row, programs_page
 from colmo.track.sweep import sweep_parent, update_parent
 
 log = logging.getLogger("colmo.track")
 
-PLOT_FILE = "best_so_far.png"
 TABLE_EVERY_S = 30.0
 
 
@@ -231,7 +230,7 @@ class MlflowTracker:
             self.client.log_artifact(self.run_id, str(run_dir / name), "robustness")
         self.run.log_hydra_config()
         if self.steps:
-            self.client.log_figure(self.run_id, self._figure(summary.task), PLOT_FILE)
+            self.client.log_figure(self.run_id, self._figure(summary.task), BEST_SO_FAR_PLOT)
         self.run.end(_status(summary))
         atexit.unregister(self.run.end)  # only now: if logging above fails, the run still ends FAILED
 
