@@ -5,7 +5,7 @@ directory of its own and resumable, and their report, read from those directorie
         task=pendulum llm=llamacpp llm.model_path=M.gguf search.max_samples=200
     python scripts/llm_experiment.py report OUT [--out OUT/report.md]
 
-`run` starts the runs one after another, `OUT/<variant>/s<seed>` each: a run whose
+`run` starts the runs one after another, `OUT/<variant>/s<seed>` each (`gfo=none` in `OUT/gfo-none/`): a run whose
 `summary.json` says it reached its limits is skipped, one that stopped before (killed, the
 machine restarted, Ctrl-C) is resumed (`resume=`), so the same command, run again, finishes
 what is left. Overrides after `--` apply to every run; a variant is one or more overrides
@@ -48,8 +48,9 @@ BOOTSTRAP_DRAWS = 10_000
 
 
 def variant_dir(variant: str) -> str:
-    """A directory name for a variant's overrides: `gfo=none` -> `gfo=none`, spaces -> `,`."""
-    return re.sub(r"[^\w.=+,-]+", "_", ",".join(variant.split()))
+    """A directory name for a variant's overrides that Hydra takes in `hydra.run.dir=` (no `=`
+    or `,`): `gfo=none` -> `gfo-none`, `gfo=oneplusone gfo.budget=20` -> `gfo-oneplusone_gfo.budget-20`."""
+    return re.sub(r"[^\w.+-]+", "_", "_".join(variant.split()).replace("=", "-"))
 
 
 def summary_of(run_dir: Path) -> Optional[dict]:

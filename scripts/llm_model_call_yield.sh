@@ -3,7 +3,7 @@
 # is evaluated, with Qwen2.5-Coder-1.5B-Instruct (Q4_K_M GGUF) in process with `llm=llamacpp`'s
 # defaults (prompt form, temperatures, duplicate retries), on the pendulum, GFO (the default),
 # one evaluation worker, 48 model calls per run, seeds 0 1 2, one run after another, each in
-# OUT/gfo=oneplusone/s<seed>: a finished one is skipped, a stopped one resumed.
+# OUT/gfo-oneplusone/s<seed>: a finished one is skipped, a stopped one resumed.
 #
 #   scripts/llm_model_call_yield.sh                          # OUT=runs/llm-model-call-yield, SEEDS="0 1 2"
 #   SEEDS="3 4" scripts/llm_model_call_yield.sh llm.prompt_format=completion   # later overrides win
