@@ -3,9 +3,10 @@
 Each method registers itself where it is defined (`@METHODS.register`, `colmo.registry`), and
 the `gfo.method` option is validated against the registry's names (`colmo.config`), so there is
 one list. `none` is a method too (`EvaluateOnce`): it tunes nothing, which it declares
-(`tunes_constants`), and whoever must know reads that, not the name. Methods
-search in normalized coordinates `z` (`params = x0 + step * z`, see `colmo.optimize.tune`):
-`z = 0` is the program's own constants, which every method asks for first.
+(`tunes_constants`), and whoever must know (the search's prompt and dedup, the tuner, the
+simplifier, the reports) reads that, not the name. Methods search in normalized coordinates `z`
+(`params = x0 + step * z`, see `colmo.optimize.tune`): `z = 0` is the program's own constants,
+which every method asks for first.
 
 A method is *comparison-based* when only the order of the values it is told matters to it
 (the ES and DE, by selection; CMA-ES, by ranks): racing (`colmo.racing.Race`) is on by
