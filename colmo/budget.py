@@ -82,16 +82,12 @@ class TimeBudget:
 
     def plan(self, cfg: SearchConfig, calibration: float, program_seconds: float, executor: Executor) -> None:
         """The run's duration estimated from the starter's calibration (`calibration` seconds
-        for its training episodes, fast path and referee) and tuning (`program_seconds`, cut
-        short or not) and `executor`'s seconds per evaluation so far; the search's deadline set
-        to leave the finish and the programs in flight their time, both said in one line; from
-        then on the deadline follows `executor`'s speed."""
+        for its training episodes, fast path and referee) and tuning (`program_seconds`), the
+        search's deadline set to leave the finish and the programs in flight their time, both
+        said in one line; from then on the deadline follows `executor`'s speed."""
         workers = executor.n_workers
         self.episode_seconds = calibration / cfg.task.episodes
         self._reference = executor.busy_seconds / executor.evaluations_done if executor.evaluations_done else 0.0
-        per_program = cfg.gfo.budget + 2 if cfg.gfo.tunes_constants else 1  # evaluations: the tuning, the rounded constants, the referee
-        # A starter cut short at its deadline took less than a program will.
-        program_seconds = max(program_seconds, self._reference * per_program / min(cfg.gfo.workers, workers))
         concurrent_programs = cfg.llm.batch_size * cfg.search.queue_size
         in_parallel = max(1, min(concurrent_programs, workers // cfg.gfo.workers))
         self.estimated_seconds = cfg.search.max_samples * program_seconds / in_parallel
@@ -99,9 +95,9 @@ class TimeBudget:
         limit = "max_samples"
         if self.max_seconds:
             # Past the deadline each program in flight ends its candidate, then scores its rounded
-            # constants on the fast path and by the referee: three evaluations each, on shared workers.
-            evaluation = self._reference or program_seconds / per_program
-            self._in_flight = SAFETY * 3 * evaluation * max(1.0, concurrent_programs / workers)
+            # constants on the fast path and by the referee: three evaluations on every training
+            # episode each (as the calibration's two were; racing's are mostly shorter), on shared workers.
+            self._in_flight = SAFETY * 3 * (calibration / 2) * max(1.0, concurrent_programs / workers)
             self._cfg, self._executor, self._available = cfg, executor, FINISH_SHARE * max(self.end - time.perf_counter(), 0.0)
             self._recent.append((executor.evaluations_done, executor.busy_seconds))
             plan = self._set_deadline()
