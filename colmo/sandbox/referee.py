@@ -19,8 +19,10 @@ the payload. Worker to child: `S` + a batch's first episode index (uint32) and i
 (int64 each) at the batch's start, then per step `O` + the live episodes' indices (uint32
 each, ascending) and their observations (float64, one row each), and `Q` to quit. Child to worker, per `O`: an `F` frame (an episode index, uint32, and
 a failure reason, UTF-8) for each live episode whose policy failed, then `A` + the actions of
-the others, in order (float64, exactly `action_size` values each). Every write of the worker
-is bounded by the request's deadline: a child that stops reading cannot block it.
+the others, in order (float64, exactly `action_size` values each), all in one write. Every
+write of the worker is bounded by the request's deadline: a child that stops reading cannot
+block it. Its descriptors are non-blocking, so a step costs it one write and one read, and a
+wait (bounded by the deadline) only when the child has not answered yet.
 
 With `trace` set, a request runs one episode, which the worker also records as it steps it
 (`colmo.trace.TraceRecorder`) and returns in `Evaluation.trace`: the recording is as
@@ -69,43 +71,77 @@ def write_all(fd: int, data: bytes, deadline: float = math.inf) -> None:
             data = data[os.write(fd, data):]
         return
     os.set_blocking(fd, False)
+    _write_before(fd, data, deadline)
+
+
+def _write_before(fd: int, data: bytes, deadline: float) -> None:
+    """`write_all` on the non-blocking `fd`: a write first, a wait only when the pipe is full
+    (a frame is far smaller than a pipe, so a step's write is one system call)."""
     while data:
+        try:
+            data = data[os.write(fd, data):]
+            continue
+        except BlockingIOError:
+            pass
         remaining = deadline - time.monotonic()
         if remaining <= 0 or not select.select([], [fd], [], remaining)[1]:
             raise RefereeTimeout
-        try:
-            data = data[os.write(fd, data):]
-        except BlockingIOError:  # another writer's bytes filled the pipe since the select
-            continue
+
+
+def frame(tag: bytes, payload: bytes = b"") -> bytes:
+    """One frame of the wire format (module docstring)."""
+    return _HEADER.pack(tag, len(payload)) + payload
 
 
 class _Channel:
-    """Frames over a pair of pipe descriptors, reads and writes bounded by a deadline."""
+    """Frames over a pair of pipe descriptors; with a finite deadline (the worker's side) both
+    are made non-blocking once and every read and write is bounded by it, without one (the
+    child's side) reads and writes block. A step costs one write each way, and one read when
+    the answer is there (one wait more when it is not yet)."""
 
     def __init__(self, read_fd: int, write_fd: int, deadline: float = math.inf):
         self.read_fd, self.write_fd, self.deadline = read_fd, write_fd, deadline
-        self.buffer = b""
+        self.buffer = bytearray()
+        self.bounded = not math.isinf(deadline)
+        if self.bounded:
+            os.set_blocking(read_fd, False)
+            os.set_blocking(write_fd, False)
+            self.readable = select.poll()
+            self.readable.register(read_fd, select.POLLIN)
 
-    def send(self, tag: bytes, payload: bytes = b"") -> None:
-        write_all(self.write_fd, _HEADER.pack(tag, len(payload)) + payload, self.deadline)
+    def send(self, frames: bytes) -> None:
+        """Write `frames` (made by `frame`, any number of them) in one write where the pipe takes it."""
+        if self.bounded:
+            _write_before(self.write_fd, frames, self.deadline)
+        else:
+            write_all(self.write_fd, frames)
 
     def receive(self) -> tuple[bytes, bytes]:
-        tag, length = _HEADER.unpack(self._read(_HEADER.size))
+        while len(self.buffer) < _HEADER.size:
+            self._fill()
+        tag, length = _HEADER.unpack_from(self.buffer)
         if length > _MAX_FRAME:
             raise ValueError(f"frame of {length} bytes")
-        return tag, self._read(length)
+        end = _HEADER.size + length
+        while len(self.buffer) < end:
+            self._fill()
+        payload = bytes(self.buffer[_HEADER.size:end])
+        del self.buffer[:end]
+        return tag, payload
 
-    def _read(self, size: int) -> bytes:
-        while len(self.buffer) < size:
-            remaining = self.deadline - time.monotonic()
-            if remaining <= 0 or not select.select([self.read_fd], [], [], None if math.isinf(remaining) else remaining)[0]:
-                raise RefereeTimeout
-            chunk = os.read(self.read_fd, max(65536, size - len(self.buffer)))
-            if not chunk:
-                raise EOFError
-            self.buffer += chunk
-        data, self.buffer = self.buffer[:size], self.buffer[size:]
-        return data
+    def _fill(self) -> None:
+        """Append what the pipe holds to the buffer, waiting (until the deadline) for it."""
+        while True:
+            try:
+                chunk = os.read(self.read_fd, 65536)
+                break
+            except BlockingIOError:  # only on the worker's side: wait, bounded
+                remaining = self.deadline - time.monotonic()
+                if remaining <= 0 or not self.readable.poll(math.ceil(remaining * 1000)):
+                    raise RefereeTimeout from None
+        if not chunk:
+            raise EOFError
+        self.buffer += chunk
 
 
 def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd: int) -> None:
@@ -143,16 +179,16 @@ def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd:
             if policy is None:  # failed at its instance's load, reported below
                 continue
             try:
-                actions.append(act(policy, obs.copy(), action_size, step))
+                actions.append(act(policy, obs.copy(), action_size, step).tobytes())
             except PolicyFailure as failure:  # its text is the program's to choose (a type's name): bounded
                 failures.append((index, failure_reason(str(failure))))
             except BaseException as error:  # SystemExit and friends raised by the policy
                 failures.append((index, describe_exception(error, f" (step {step})")))
-        for index, reason in failures:
+        reports = b"".join(frame(b"F", _COUNT.pack(index) + reason.encode()) for index, reason in failures)
+        for index, _ in failures:
             policies.pop(index, None)
-            channel.send(b"F", _COUNT.pack(index) + reason.encode())
         failures = []
-        channel.send(b"A", b"".join(action.tobytes() for action in actions))
+        channel.send(reports + frame(b"A", b"".join(actions)))  # one write per step
         step += 1
 
 
@@ -204,7 +240,7 @@ def referee_evaluation(envs: Sequence[Environment], request: EvalRequest, read_f
         evaluation = episodes.evaluation(request.race, simulated)
         if evaluation.failure is not None or evaluation.raced_out:
             break
-    channel.send(b"Q")
+    channel.send(frame(b"Q"))
     if recorder is None or evaluation.failure is not None:
         return evaluation
     try:
@@ -219,28 +255,34 @@ def _run_batch(channel: _Channel, envs: Sequence[Environment], request: EvalRequ
     failure; the control steps simulated."""
     first = episodes.live[0]
     seeds = [request.seeds[index] for index in episodes.live]
-    channel.send(b"S", _COUNT.pack(first) + np.asarray(seeds, dtype="<i8").tobytes())
-    observations: dict[int, np.ndarray] = {}
+    channel.send(frame(b"S", _COUNT.pack(first) + np.asarray(seeds, dtype="<i8").tobytes()))
+    env_of = {index: envs[index % len(envs)] for index in episodes.live}
+    initial = []
     for index, seed in zip(episodes.live, seeds):
         np.random.seed(seed % 2**32)  # as rollout does, for any environment that draws from it
-        observations[index] = np.asarray(envs[index % len(envs)].reset(seed), dtype=np.float64)
+        initial.append(env_of[index].reset(seed))
+    observations = np.array(initial, dtype=np.float64)  # row k: episode first + k, sent as it is
     if recorder is not None:
-        recorder.start(observations[first])
+        recorder.start(observations[0])
     action_size = envs[0].action_size
     simulated = 0
+    framed: list[int] | None = None
     for _ in range(request.steps or envs[0].horizon):
         if not episodes.live:
             break
         live = episodes.live
-        header = _COUNT.pack(len(live)) + np.asarray(live, dtype="<u4").tobytes()
-        channel.send(b"O", header + b"".join(observations[index].tobytes() for index in live))
-        for index, action in _actions(channel, live, action_size, episodes).items():
+        if live is not framed:  # the first step, or a failure changed the live episodes
+            framed, rows = live, [index - first for index in live]
+            header = _COUNT.pack(len(live)) + np.asarray(live, dtype="<u4").tobytes()
+        sent = observations if len(rows) == len(observations) else observations[rows]
+        channel.send(frame(b"O", header + sent.tobytes()))
+        for index, action in _actions(channel, live, action_size, episodes):
             if index not in episodes.live:  # a failure reported for an earlier episode dropped it
                 continue
-            reward, obs = envs[index % len(envs)].step(action)
+            reward, obs = env_of[index].step(action)
             if recorder is not None:
                 recorder.step(action, reward, obs)
-            observations[index] = np.asarray(obs, dtype=np.float64)
+            observations[index - first] = obs
             episodes.totals[index] += reward
             simulated += 1
     for index in episodes.live:
@@ -251,9 +293,10 @@ def _run_batch(channel: _Channel, envs: Sequence[Environment], request: EvalRequ
     return simulated
 
 
-def _actions(channel: _Channel, live: list[int], action_size: int, episodes: _Episodes) -> dict[int, np.ndarray]:
+def _actions(channel: _Channel, live: list[int], action_size: int, episodes: _Episodes) -> list[tuple[int, np.ndarray]]:
     """The child's actions for the `live` episodes, checked here (they come from untrusted
-    code); the failures it reports, and malformed answers, go to `episodes`."""
+    code), as `(episode, action)` pairs; the failures it reports, and malformed answers, go to
+    `episodes`."""
     failed = set()
     while True:
         tag, payload = channel.receive()
@@ -262,17 +305,17 @@ def _actions(channel: _Channel, live: list[int], action_size: int, episodes: _Ep
         (index,) = _COUNT.unpack_from(payload) if len(payload) >= _COUNT.size else (-1,)
         if index not in live or index in failed:
             episodes.fail(live[0], "tampering: the policy process sent a malformed action")
-            return {}
+            return []
         failed.add(index)
         episodes.fail(index, failure_reason(payload[_COUNT.size:].decode("utf-8", errors="replace")))
     acting = [index for index in live if index not in failed]
     if tag != b"A" or len(payload) != 8 * action_size * len(acting):
         episodes.fail(live[0], "tampering: the policy process sent a malformed action")
-        return {}
-    actions = np.frombuffer(payload, dtype=np.float64).reshape(len(acting), action_size)
-    checked = {}
-    for index, action in zip(acting, actions):
-        if not np.isfinite(action).all():
-            episodes.fail(index, "tampering: the policy process sent a malformed action")
-        checked[index] = action.copy()
-    return checked
+        return []
+    # A copy: the environment gets writable actions, as in the fast path.
+    actions = np.frombuffer(payload, dtype=np.float64).reshape(len(acting), action_size).copy()
+    if not np.isfinite(actions).all():  # one check for the common case, then which episodes
+        for index, finite in zip(acting, np.isfinite(actions).all(axis=1).tolist()):
+            if not finite:
+                episodes.fail(index, "tampering: the policy process sent a malformed action")
+    return list(zip(acting, actions))
