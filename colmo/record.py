@@ -19,8 +19,9 @@ import time
 from dataclasses import asdict, dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Optional, Protocol
 
+from colmo.generate.base import Generation
+
 if TYPE_CHECKING:
-    from colmo.generate.base import Generation
     from colmo.optimize.tune import ProgramResult
     from colmo.program import ParametricProgram
 
@@ -40,7 +41,7 @@ class Sample:
     batch: int
     island: int
     parent_keys: tuple[str, ...]
-    generation: "Generation"
+    generation: Generation
 
 
 def finite_or_none(value: float) -> Optional[float]:
@@ -109,6 +110,13 @@ class SampleRecord:
             steps=result.steps, raced_out=result.raced_out, cut_short=result.cut_short, evaluation_seconds=result.seconds,
             lines=result.size.lines, nodes=result.size.nodes,
         )
+
+    def as_sample(self) -> Sample:
+        """The generated sample this record was made from (`of`'s inverse: a resumed run evaluates it again)."""
+        generation = Generation(
+            self.raw, self.generator, self.prompt_tokens, self.completion_tokens, self.generation_seconds, self.prompt_prefix, self.model_calls,
+        )
+        return Sample(self.sample, self.batch, self.island, self.parent_keys, generation)
 
     def as_row(self) -> dict[str, Any]:
         return asdict(self)

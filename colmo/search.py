@@ -235,9 +235,8 @@ class Search:
 
     def _prompt(self, retry: int = 0) -> Prompt:
         """A prompt from a new selection of the database; `retry`: the regeneration of a duplicate it is for."""
-        prompt = build_prompt(
-            self.spec.description, self.database.select(), constants_tuned=self.cfg.gfo.tunes_constants, allowed_imports=self.spec.allowed_imports,
-        )
+        spec, tuned = self.spec, self.cfg.gfo.tunes_constants
+        prompt = build_prompt(spec.description, self.database.select(), constants_tuned=tuned, allowed_imports=spec.allowed_imports)
         return dataclasses.replace(prompt, retry=retry)
 
     def _generate(self) -> Optional[_Batch]:
@@ -288,13 +287,8 @@ class Search:
     def _reevaluate(self, records: list[SampleRecord]) -> _Batch:
         """The pending and interrupted samples of a resumed run, as a batch of their own."""
         batch = _Batch(records[0].batch, 0.0, time.perf_counter())
-        for record in records:
-            generation = Generation(
-                record.raw, record.generator, record.prompt_tokens, record.completion_tokens, record.generation_seconds, record.prompt_prefix,
-                record.model_calls,
-            )
-            sample = Sample(record.sample, record.batch, record.island, record.parent_keys, generation)
-            batch.outcomes.append(self.outcomes.submit(sample, self.reader.read(generation), self.database))
+        for sample in (record.as_sample() for record in records):
+            batch.outcomes.append(self.outcomes.submit(sample, self.reader.read(sample.generation), self.database))
         self.in_flight_samples += sum(record.model_calls for record in records)
         return batch
 

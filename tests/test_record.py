@@ -1,0 +1,39 @@
+"""What a search records (`colmo.record`): a sample's record and back, and the one `Totals`
+that the counters make for every report."""
+
+from __future__ import annotations
+
+import pytest
+
+from colmo.generate import Generation
+from colmo.record import DUPLICATE, EVALUATED, FAILED, INTERRUPTED, PENDING, UNUSABLE, Counters, Sample, SampleRecord
+
+
+def sample(index: int, calls: int = 1) -> Sample:
+    generation = Generation("def policy(obs):\n    return 0.0\n", "mutate", 10, 20 * calls, 0.5 * calls, "", calls)
+    return Sample(index, index // 2, 1, ("parent",), generation)
+
+
+def test_a_pending_record_gives_back_the_sample_it_was_made_from():
+    assert SampleRecord.of(sample(3, calls=2), PENDING).as_sample() == sample(3, calls=2)
+
+
+def test_totals_count_model_calls_records_by_status_and_rates():
+    counters = Counters()
+    # Six answers kept, eight model calls: one evaluated program was the third answer of its
+    # prompt (two duplicates thrown away before it), and one sample is a duplicate itself.
+    statuses = [(EVALUATED, 3), (EVALUATED, 1), (FAILED, 1), (UNUSABLE, 1), (DUPLICATE, 1), (INTERRUPTED, 1)]
+    for index, (status, calls) in enumerate(statuses):
+        counters.count(SampleRecord.of(sample(index, calls), status))
+    totals = counters.totals(seconds=10.0, generator_seconds=4.0, evaluator_seconds=15.0, workers=2)
+    assert (totals.samples, totals.programs_evaluated, totals.failures, totals.unusable_outputs) == (8, 2, 1, 1)
+    assert (totals.duplicates_skipped, totals.interrupted) == (1, 1)
+    assert totals.valid_program_rate == pytest.approx(2 / 4)  # duplicates and interrupted samples aside
+    assert totals.duplicate_rate == pytest.approx(3 / 8)  # two regenerated, one recorded
+    assert totals.tokens_per_second == pytest.approx(20 / 0.5)
+    assert (totals.generator_busy, totals.evaluator_busy, totals.seconds) == (pytest.approx(0.4), pytest.approx(0.75), 10.0)
+
+
+def test_totals_before_anything_happened_are_zeros():
+    totals = Counters().totals(seconds=0.0, generator_seconds=0.0, evaluator_seconds=0.0, workers=2)
+    assert totals.samples == 0 and totals.valid_program_rate == totals.evaluator_busy == totals.evaluations_per_second == 0.0
