@@ -33,9 +33,9 @@ from typing import Optional
 from colmo.config import SearchConfig
 from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor
-from colmo.heldout import heldout_evaluator, heldout_score
+from colmo.heldout import heldout_evaluator, heldout_score, robustness_of
 from colmo.record import EVALUATED, SampleRecord
-from colmo.robustness import grid_points, perturbed, robustness_report, save
+from colmo.robustness import grid_points, save
 from colmo.store import SIMPLIFIED_POLICY_FILE, ProgramStore
 
 log = logging.getLogger("colmo.search")
@@ -202,9 +202,8 @@ def _robustness(cfg: SearchConfig, executor: Executor, evaluator: Evaluator, rec
     """The best policy's robustness report (`colmo.robustness`) on `evaluation.robustness_episodes`
     held-out episodes per grid point, saved into the run directory; the summary's `robustness`."""
     options = cfg.evaluation
-    heldout = heldout_evaluator(evaluator, cfg.seed, options.robustness_episodes)
-    report = robustness_report(
-        lambda perturb: heldout_score(executor, perturbed(heldout, perturb), record.skeleton, record.params),
+    report = robustness_of(
+        executor, evaluator, record.skeleton, record.params, cfg.seed, options.robustness_episodes,
         options.robustness_magnitudes, options.robustness_delays,
     )
     if any(point.evaluation.failure == CANCELLED for point in report.points):  # the search is stopping at once

@@ -11,7 +11,7 @@ from conftest import compose, last_json_line, run_colmo
 from mlflow import MlflowClient
 
 from colmo.cli import help_text
-from colmo.config import PerturbConfig
+from colmo.config import HeldoutConfig, PerturbConfig
 from colmo.environments.perturb import PerturbedEnvironment, with_perturbation
 from colmo.errors import ConfigError
 from colmo.finish import plan_finish
@@ -103,6 +103,10 @@ def test_out_of_range_magnitudes_are_configuration_errors():
         PerturbConfig(mass=1.0)
     with pytest.raises(ConfigError, match="task.perturb.delay"):
         PerturbConfig(delay=-1)
+    with pytest.raises(ConfigError, match=r"evaluation.robustness_magnitudes must lie in \(0, 1\), got \[1.5\]"):
+        HeldoutConfig(robustness_magnitudes=[1.5])
+    with pytest.raises(ConfigError, match="evaluation.robustness_episodes must be >= 1"):
+        HeldoutConfig(robustness_episodes=0)
 
 
 def test_colmo_evaluate_robustness_reports_each_magnitude_nominal_first_and_repeats(tmp_path, examples):

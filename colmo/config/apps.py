@@ -11,7 +11,7 @@ from colmo.config.components import ExecutorConfig, GFOConfig, TrackerConfig
 from colmo.config.fields import option, require
 from colmo.config.generators import GeneratorConfig
 from colmo.config.search import DatabaseConfig, HeldoutConfig, SearchLoopConfig, SimplifyConfig
-from colmo.config.task import TaskConfig
+from colmo.config.task import ROBUSTNESS_DELAYS, ROBUSTNESS_MAGNITUDES, TaskConfig, check_robustness_grid
 
 
 @dataclass
@@ -67,17 +67,13 @@ class EvaluateConfig(PolicyFileConfig):
     episodes: int = option(100, "held-out episodes")
     robustness: bool = option(False, "also score the policy over a grid of model-mismatch magnitudes (colmo.robustness)")
     robustness_episodes: int = option(5, "held-out episodes per robustness grid point")
-    robustness_magnitudes: list[float] = option([0.05, 0.1, 0.2, 0.4], "relative magnitudes of the robustness grid (0, nominal, is always scored)")
-    robustness_delays: list[int] = option([1, 2, 4], "control delays (steps) of the robustness grid")
+    robustness_magnitudes: list[float] = option(ROBUSTNESS_MAGNITUDES, "relative magnitudes of the robustness grid (0, nominal, is always scored)")
+    robustness_delays: list[int] = option(ROBUSTNESS_DELAYS, "control delays (steps) of the robustness grid")
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        require(
-            min(self.episodes, self.robustness_episodes) >= 1,
-            f"episodes and robustness_episodes must be >= 1, got {self.episodes} and {self.robustness_episodes}",
-        )
-        require(all(0 < m < 1 for m in self.robustness_magnitudes), f"robustness_magnitudes must lie in (0, 1), got {list(self.robustness_magnitudes)}")
-        require(all(k >= 1 for k in self.robustness_delays), f"robustness_delays must be >= 1 step, got {list(self.robustness_delays)}")
+        require(self.episodes >= 1, f"episodes must be >= 1, got {self.episodes}")
+        check_robustness_grid("", self.robustness_episodes, self.robustness_magnitudes, self.robustness_delays)
 
 
 @dataclass

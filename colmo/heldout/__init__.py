@@ -13,13 +13,13 @@ front end.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Optional
+from typing import Optional, Sequence
 
-from colmo.config import EvaluateConfig, ExecutorConfig, PerturbConfig, TaskConfig
+from colmo.config import ExecutorConfig, PerturbConfig, TaskConfig
 from colmo.environments.perturb import with_perturbation
 from colmo.evaluation import Evaluation, Evaluator, Executor
 from colmo.optimize.tune import CandidateEvaluator, calibrated
-from colmo.program import ParametricProgram, parametrize
+from colmo.program import parametrize
 from colmo.robustness import RobustnessReport, perturbed, robustness_report
 from colmo.rollout import episode_seeds, heldout_seeds
 from colmo.specs import Spec, load_task_spec
@@ -46,12 +46,15 @@ def task_evaluator(task: TaskConfig, executor_cfg: ExecutorConfig, executor: Exe
     return spec, calibrated(executor, provisional, parametrize(spec.starter_code), executor_cfg.timeout_s)
 
 
-def robustness_of(executor: Executor, evaluator: Evaluator, program: ParametricProgram, cfg: EvaluateConfig) -> RobustnessReport:
-    """The robustness report of `program` on `cfg.robustness_episodes` held-out episodes, every
-    grid point scored by the referee with the task's options plus that point's perturbation."""
-    heldout = heldout_evaluator(evaluator, cfg.seed, cfg.robustness_episodes)
+def robustness_of(
+    executor: Executor, evaluator: Evaluator, skeleton: str, params: Sequence[float], seed: int, episodes: int,
+    magnitudes: Sequence[float], delays: Sequence[int],
+) -> RobustnessReport:
+    """The robustness report of a program on `episodes` held-out episodes of run seed `seed`, every
+    grid point scored by the referee on the task's nominal model plus that point's perturbation."""
+    heldout = heldout_evaluator(evaluator, seed, episodes)
 
     def score(perturb: PerturbConfig) -> Evaluation:
-        return heldout_score(executor, perturbed(heldout, perturb), program.skeleton, program.values)
+        return heldout_score(executor, perturbed(heldout, perturb), skeleton, tuple(params))
 
-    return robustness_report(score, cfg.robustness_magnitudes, cfg.robustness_delays)
+    return robustness_report(score, magnitudes, delays)

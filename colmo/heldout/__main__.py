@@ -29,7 +29,10 @@ def main(cfg: EvaluateConfig) -> None:
     with policy_session(cfg) as session:
         program = session.program
         evaluation = heldout_score(session.executor, session.heldout(cfg.episodes), program.skeleton, program.values)
-        report = robustness_of(session.executor, session.evaluator, program, cfg) if cfg.robustness else None
+        report = robustness_of(
+            session.executor, session.evaluator, program.skeleton, program.values, cfg.seed, cfg.robustness_episodes,
+            cfg.robustness_magnitudes, cfg.robustness_delays,
+        ) if cfg.robustness else None
     print(f"held-out score over {cfg.episodes} episodes: " + (f"{evaluation.score:.2f}" if not evaluation.failure else f"failed: {evaluation.failure}"))
     result = {
         "task": cfg.task.name, "policy_file": cfg.policy_file, "episodes": cfg.episodes, "seed": cfg.seed,
