@@ -88,8 +88,10 @@ def _extract(text: str, function_name: str, prefix: str) -> str:
             statements = [s for module in _code_regions(text, budget) for s in module.body]
         versions = _versions(statements, version)
     if not versions:
-        if re.search(rf"^\s*def\s+{version.pattern}\s*\(", text, re.MULTILINE):
-            raise ExtractionError(f"found 'def {function_name}' but no complete top-level definition of it")
+        signature = re.search(rf"^[ \t]*def\s+{version.pattern}\s*\(", text, re.MULTILINE)
+        if signature:
+            where = _syntax_error_from(text, text.count("\n", 0, signature.start()))
+            raise ExtractionError(f"found 'def {function_name}' but no complete top-level definition of it{where}")
         raise ExtractionError(f"no function named '{function_name}'")
     chosen = versions[-1]
     if _is_empty(chosen):
@@ -99,6 +101,32 @@ def _extract(text: str, function_name: str, prefix: str) -> str:
     _strip_annotations(module)
     _add_missing_imports(module)
     return ast.unparse(module)
+
+
+def first_syntax_error(source: str) -> tuple[int, str] | None:
+    """The line and message of the first syntax error in `source`, if it has one (None too for
+    what the parser refuses for other reasons: null bytes, absurd nesting)."""
+    try:
+        ast.parse(source)
+    except SyntaxError as error:
+        return error.lineno or 1, error.msg
+    except (ValueError, RecursionError, MemoryError):
+        pass
+    return None
+
+
+def _syntax_error_from(text: str, first: int) -> str:
+    """`: syntax error at line N: message` for the first syntax error in the lines of `text` from
+    line `first` (0-based: the policy's `def`) to the end of its fenced block; N counts lines of
+    `text`. Empty if those lines parse (a method of a class, say)."""
+    lines = text.splitlines()[first:]
+    end = next((i for i, line in enumerate(lines) if i and line.lstrip().startswith("```")), len(lines))
+    indent = len(lines[0]) - len(lines[0].lstrip())
+    error = first_syntax_error("\n".join(line[indent:] if line[:indent].isspace() else line for line in lines[:end]))
+    if error is None:
+        return ""
+    message = re.sub(r"detected at line (\d+)", lambda found: f"detected at line {first + int(found[1])}", error[1])
+    return f": syntax error at line {first + error[0]}: {message}"
 
 
 def _strip_annotations(module: ast.Module) -> None:

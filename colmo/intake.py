@@ -12,14 +12,13 @@ statically checked (`colmo.sandbox.check`).
 
 from __future__ import annotations
 
-import ast
 import textwrap
 from pathlib import Path
 from typing import Optional, Sequence
 
 from colmo.astutil import node_count
 from colmo.errors import ConfigError
-from colmo.extract import ExtractionError, extract_policy
+from colmo.extract import ExtractionError, extract_policy, first_syntax_error
 from colmo.program import ParametricProgram, ProgramError, instantiate, measure, parametrize
 from colmo.sandbox.check import ForbiddenProgram, check_tree, parse_program
 
@@ -114,10 +113,4 @@ def _syntax_error(text: str) -> tuple[int, str] | None:
     in a text `read_program` refuses unparsed: its reason stands)."""
     if len(text) > MAX_ANSWER_CHARS or nesting(text) > MAX_NESTING:
         return None
-    try:
-        ast.parse(text)
-    except SyntaxError as error:
-        return error.lineno or 1, error.msg
-    except (ValueError, RecursionError, MemoryError):  # null bytes, absurd nesting: other reasons
-        pass
-    return None
+    return first_syntax_error(text)

@@ -302,9 +302,12 @@ BAD = [
     ("pass_body", "```python\ndef policy(obs):\n    pass\n```", "empty policy body"),
     ("docstring_body", 'def policy_v2(obs):\n    """Improved version of policy_v1."""\n', "empty policy body"),
     ("ellipsis_body", "Fill in the body:\n\ndef policy(obs):\n    ...\n", "empty policy body"),
-    ("unparseable_definition", "```python\ndef policy(obs) return obs[0] * 2\n```", "found 'def policy' but no complete top-level definition of it"),
-    ("truncated_in_signature", "```python\nimport numpy as np\n\ndef policy(obs,", "found 'def policy' but no complete top-level definition of it"),
-    ("truncated_in_docstring", '```python\ndef policy(obs):\n    """Improved version of', "found 'def policy' but no complete top-level definition of it"),
+    ("unparseable_definition", "```python\ndef policy(obs) return obs[0] * 2\n```",
+     "found 'def policy' but no complete top-level definition of it: syntax error at line 2: expected ':'"),
+    ("truncated_in_signature", "```python\nimport numpy as np\n\ndef policy(obs,",
+     "found 'def policy' but no complete top-level definition of it: syntax error at line 4: '(' was never closed"),
+    ("truncated_in_docstring", '```python\ndef policy(obs):\n    """Improved version of',
+     "found 'def policy' but no complete top-level definition of it: syntax error at line 3: unterminated triple-quoted string literal (detected at line 3)"),
     ("method_of_a_class", "class Controller:\n    def policy(self, obs):\n        return 1.0\n", "found 'def policy' but no complete top-level definition of it"),
 ]
 
