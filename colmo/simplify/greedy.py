@@ -167,17 +167,13 @@ class _Scorer:
         return [Scores(t, h) for t, h in zip(self.train(codes), self.heldout(codes))]
 
 
-@dataclass(frozen=True)
 class _Rule:
     """The acceptance rule of the module docstring, against the original program's scores."""
 
-    reference: Scores
-    tolerance: float
-
-    @property
-    def allowed(self) -> float:
-        scale = abs(self.reference.train)
-        return self.tolerance * scale + 1e-9 * max(1.0, scale)
+    def __init__(self, reference: Scores, tolerance: float):
+        scale = abs(reference.train)
+        self.reference = reference
+        self.allowed = tolerance * scale + 1e-9 * max(1.0, scale)  # the loss a program may cost, noise included
 
     def passes_training(self, train: float) -> bool:
         return train >= self.reference.train - self.allowed
