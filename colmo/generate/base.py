@@ -81,6 +81,20 @@ class Generator(abc.ABC):
         """Release connections, threads or GPU memory."""
 
 
+class LanguageModelGenerator(Generator):
+    """A generator that asks a language model in the form `llm.prompt_format` says: the prompt's
+    chat messages (`chat`), or its text for the model to continue, which its answers then
+    continue (`prefix`)."""
+
+    def __init__(self, cfg, seed: int, probe: Optional[Probe] = None) -> None:
+        super().__init__(cfg, seed, probe)
+        self.chat = cfg.prompt_format == "chat"
+
+    def prefix(self, prompt: Prompt) -> str:
+        """What an answer to `prompt` continues: nothing in the chat form, the prompt text in the completion form."""
+        return "" if self.chat else prompt.text
+
+
 def import_library(module: str, package: str, llm: str) -> Any:
     """The optional library `llm=<llm>` runs on; `GeneratorError` saying how to install it (the
     extra of colmo named like the generator)."""

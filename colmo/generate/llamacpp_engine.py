@@ -22,12 +22,12 @@ from typing import Any, Optional
 import numpy as np
 
 from colmo.config import LlamaCppConfig
-from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, describe_error, import_library, logger
+from colmo.generate.base import GENERATORS, Generation, GeneratorError, LanguageModelGenerator, Probe, describe_error, import_library, logger
 from colmo.prompt import COMPLETION_STOP, Prompt
 
 
 @GENERATORS.register("llamacpp")
-class LlamaCppGenerator(Generator):
+class LlamaCppGenerator(LanguageModelGenerator):
     """A `llama_cpp.Llama` in this process; the batch is `n` completions sampled in turn."""
 
     options = LlamaCppConfig
@@ -81,10 +81,9 @@ class LlamaCppGenerator(Generator):
             temperature=cfg.temperature_for(prompt.retry), top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self.request_seed(),
             logits_processor=self._until_cancelled,
         )
-        chat = cfg.prompt_format == "chat"
         start = time.perf_counter()
         try:
-            if chat:
+            if self.chat:
                 response = self._llm.create_chat_completion(messages=prompt.messages, **sampling)
             else:
                 response = self._llm.create_completion(prompt=prompt.text, stop=list(COMPLETION_STOP), **sampling)
@@ -93,14 +92,14 @@ class LlamaCppGenerator(Generator):
         except Exception as error:
             raise GeneratorError(f"llama.cpp failed: {describe_error(error)}") from error
         seconds = time.perf_counter() - start
-        text = _text(response, chat)
+        text = _text(response, self.chat)
         usage: dict[str, Any] = response.get("usage") or {}
         prompt_tokens, completion_tokens = usage.get("prompt_tokens", 0), usage.get("completion_tokens", 0)
         logger.info(
             "llamacpp: %d prompt + %d completion tokens, %.1fs (%.1f tokens/s)",
             prompt_tokens, completion_tokens, seconds, completion_tokens / seconds if seconds else 0.0,
         )
-        return Generation(text, self.name, prompt_tokens, completion_tokens, seconds, "" if chat else prompt.text)
+        return Generation(text, self.name, prompt_tokens, completion_tokens, seconds, self.prefix(prompt))
 
     def close(self) -> None:
         llm, self._llm = self._llm, None

@@ -34,7 +34,7 @@ import openai
 
 from colmo.config import OpenAIConfig
 from colmo.errors import one_line
-from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, batch_of, describe_error, logger
+from colmo.generate.base import GENERATORS, Generation, GeneratorError, LanguageModelGenerator, Probe, batch_of, describe_error, logger
 from colmo.prompt import COMPLETION_STOP, Prompt
 
 _CHECK_TIMEOUT_S = 5.0
@@ -72,7 +72,7 @@ class _Server:
 
 
 @GENERATORS.register("openai")
-class OpenAIGenerator(Generator):
+class OpenAIGenerator(LanguageModelGenerator):
     """Completions from OpenAI-compatible servers, with per-server concurrency limits, our own
     retries and failover."""
 
@@ -141,7 +141,7 @@ class OpenAIGenerator(Generator):
             start = time.perf_counter()
             try:
                 response = self._send(server, prompt, n, seed)
-                texts = _texts(response, cfg.prompt_format == "chat")
+                texts = _texts(response, self.chat)
             except openai.APIStatusError as error:
                 if error.status_code not in _RETRYABLE_STATUS and error.status_code < 500:
                     message = f"{server.url} refused the request: HTTP {error.status_code}: {one_line(error)}"
@@ -170,7 +170,7 @@ class OpenAIGenerator(Generator):
             model=cfg.model, temperature=cfg.temperature_for(prompt.retry), top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=seed,
             **({"n": n} if n > 1 else {}),
         )
-        if cfg.prompt_format == "chat":
+        if self.chat:
             return server.client.chat.completions.create(messages=prompt.messages, **sampling)
         return server.client.completions.create(prompt=prompt.text, stop=list(COMPLETION_STOP), **sampling)
 
@@ -234,5 +234,6 @@ class OpenAIGenerator(Generator):
             "openai: %s: %d completions, %d prompt + %d completion tokens, %.1fs",
             server.url, len(texts), prompt_tokens, completion_tokens, seconds,
         )
-        prefix = "" if self.cfg.prompt_format == "chat" else prompt.text
-        return batch_of(texts, f"openai:{self.cfg.model}@{server.url}", prompt_tokens, _split(completion_tokens, len(texts)), seconds, prefix)
+        return batch_of(
+            texts, f"openai:{self.cfg.model}@{server.url}", prompt_tokens, _split(completion_tokens, len(texts)), seconds, self.prefix(prompt),
+        )

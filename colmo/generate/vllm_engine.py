@@ -12,12 +12,12 @@ import time
 from typing import Optional
 
 from colmo.config import VLLMConfig
-from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, batch_of, describe_error, import_library, logger
+from colmo.generate.base import GENERATORS, Generation, GeneratorError, LanguageModelGenerator, Probe, batch_of, describe_error, import_library, logger
 from colmo.prompt import COMPLETION_STOP, Prompt
 
 
 @GENERATORS.register("vllm")
-class VLLMGenerator(Generator):
+class VLLMGenerator(LanguageModelGenerator):
     """`vllm.LLM` in this process; the batch is the `n` outputs of one request."""
 
     options = VLLMConfig
@@ -38,14 +38,13 @@ class VLLMGenerator(Generator):
 
     def generate(self, prompt: Prompt, n: int) -> list[Generation]:
         cfg = self.cfg
-        chat = cfg.prompt_format == "chat"
         params = self._sampling_params(
             # the engine's seed is the config's; each request gets its own
             n=n, temperature=cfg.temperature_for(prompt.retry), top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self.request_seed(),
-            **({} if chat else {"stop": list(COMPLETION_STOP)}),
+            **({} if self.chat else {"stop": list(COMPLETION_STOP)}),
         )
         start = time.perf_counter()
-        if chat:
+        if self.chat:
             [output] = self._llm.chat(prompt.messages, sampling_params=params, use_tqdm=False)
         else:
             [output] = self._llm.generate([prompt.text], sampling_params=params, use_tqdm=False)
@@ -57,7 +56,7 @@ class VLLMGenerator(Generator):
             len(output.outputs), prompt_tokens, sum(completion_tokens), seconds,
         )
         texts = [completion.text for completion in output.outputs]
-        return batch_of(texts, self.name, prompt_tokens, completion_tokens, seconds, "" if chat else prompt.text)
+        return batch_of(texts, self.name, prompt_tokens, completion_tokens, seconds, self.prefix(prompt))
 
     def close(self) -> None:
         self._llm = None  # the engine frees its GPU memory when collected
