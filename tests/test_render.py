@@ -11,6 +11,7 @@ OpenGL the video tests skip, except in CI (`CI=true`), where they must run (with
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import subprocess
@@ -317,6 +318,16 @@ def test_plot_handles_many_observation_dimensions(tmp_path):
     )
     with Image.open(plot_episode(trace, tmp_path / "quadruped.png", "78 observations")) as image:
         assert image.format == "PNG"
+
+
+def test_the_plot_shows_the_action_the_simulator_applied(pendulum, pendulum_trace, tmp_path):
+    raw = np.full_like(pendulum_trace.actions, -40.0)  # a torque bounded to +-1
+    applied = pendulum.applied_actions(raw)
+    assert np.all(applied == pendulum.model.actuator_ctrlrange[:, 0])
+    assert np.array_equal(pendulum.applied_actions(applied), applied)  # within the range: unchanged
+    trace = dataclasses.replace(pendulum_trace, actions=raw)
+    with Image.open(plot_episode(trace, tmp_path / "clamped.png", "clamped", applied)) as image:
+        assert image.format == "PNG" and image.size == (1100, 900)
 
 
 # --- videos ------------------------------------------------------------------------------------

@@ -110,6 +110,14 @@ class MujocoEnvironment(Environment):
         mujoco.mj_step1(self.model, self.data)
         return self.reward(), self.observation()
 
+    def applied_actions(self, actions: np.ndarray) -> np.ndarray:
+        """`actions` (one row per step) as MuJoCo applies them in `step`: clamped to the control
+        range of each actuator whose range is limited, unless the model disables clamping."""
+        if self.model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_CLAMPCTRL):
+            return np.array(actions, dtype=np.float64)
+        low, high = self.model.actuator_ctrlrange[:, 0], self.model.actuator_ctrlrange[:, 1]
+        return np.where(self.model.actuator_ctrllimited.astype(bool), np.clip(actions, low, high), actions)
+
     def check_episode(self) -> None:
         # MuJoCo resets a diverged state by itself and only counts a warning, so an unstable
         # episode would otherwise go on scoring garbage; one check per episode is enough.

@@ -80,7 +80,8 @@ def render_episode(
     frames take about `video_seconds` if given (fewer frames per second: `render_video`)."""
     start = time.monotonic()
     directory = Path(directory)
-    plot = plot_episode(trace, directory / PLOT_FILE, title)
+    applied = env.applied_actions(trace.actions) if isinstance(env, MujocoEnvironment) else None
+    plot = plot_episode(trace, directory / PLOT_FILE, title, applied)
     video, note = None, None
     if not isinstance(env, MujocoEnvironment) or trace.states is None:
         note = f"no video: {type(env).__name__} is not a MuJoCo environment"

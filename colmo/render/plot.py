@@ -8,7 +8,7 @@ backend and no global figure state.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
@@ -22,9 +22,11 @@ _LINE_PLOT_MAX_DIMS = 10  # more signals than this are drawn as a heat map, one 
 _HEAT_MAP_LABELLED_ROWS = 30  # up to this many rows, each row's tick shows its scale
 
 
-def plot_episode(trace: EpisodeTrace, path: Path, title: str) -> Path:
+def plot_episode(trace: EpisodeTrace, path: Path, title: str, applied: Optional[np.ndarray] = None) -> Path:
     """Write a PNG (1100 x 900) of the observations, actions and cumulative reward over the
-    episode; return its path.
+    episode; return its path. `applied`: the actions as the simulator applied them (clamped to
+    the actuators' ranges), drawn instead of the policy's, whose raw values, where they differ,
+    are drawn beside them as thin dashed lines.
 
     Up to 10 signals are drawn as labelled lines; more (the cheetah's 17 observations, the
     quadruped's 78) as a heat map with one row per signal, each row coloured from its own minimum
@@ -38,7 +40,14 @@ def plot_episode(trace: EpisodeTrace, path: Path, title: str) -> Path:
     obs_axes, action_axes, reward_axes = figure.subplots(3, 1, sharex=True, height_ratios=(3, 2, 1.4))
     _plot_signals(figure, obs_axes, times, trace.observations, "observation", "obs")
     # An action holds for its control period: drawn as steps to the next observation's time.
-    _plot_signals(figure, action_axes, times, np.vstack([trace.actions, trace.actions[-1:]]), "action", "act", steps=True)
+    actions = trace.actions if applied is None else applied
+    _plot_signals(figure, action_axes, times, np.vstack([actions, actions[-1:]]), "action", "act", steps=True)
+    if applied is not None and not np.array_equal(applied, trace.actions):
+        raw = np.vstack([trace.actions, trace.actions[-1:]])
+        if raw.shape[1] <= _LINE_PLOT_MAX_DIMS:
+            for i in range(raw.shape[1]):
+                action_axes.plot(times, raw[:, i], linewidth=0.7, linestyle="--", color="0.5", drawstyle="steps-post")
+        action_axes.set_title("applied (clamped to the actuator range); dashed: the policy's raw output", fontsize=9, loc="left")
     reward_axes.plot(times, np.concatenate([[0.0], np.cumsum(trace.rewards)]), color="tab:green", linewidth=1.5)
     reward_axes.set_ylabel("cumulative reward")
     reward_axes.set_title(f"return {trace.episode_return:.4g} over {trace.steps} steps", fontsize=9, loc="left")
