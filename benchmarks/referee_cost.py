@@ -11,8 +11,14 @@ side in alternating rounds on one sandbox worker (medians reported):
   a fresh program instance per episode as in the sandbox;
 and the referee's share of a tuned program (`gfo.budget` fast evaluations, one referee).
 
+With `--cpu`, also the CPU time of the same work without confinement, in processes this script
+forks: the fast path (`evaluate_program` here) against the referee's two sides (the worker's
+loop here, `serve_policy` in a forked child), each process's `time.process_time`. On a loaded
+machine wall times mostly measure the share of a core the scheduler gives; CPU time is what the
+code costs.
+
     python benchmarks/referee_cost.py                       # every task, 5 rounds
-    python benchmarks/referee_cost.py --tasks pendulum cheetah --rounds 3
+    python benchmarks/referee_cost.py --tasks pendulum cheetah --rounds 3 --cpu
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
+import struct
 import time
 from pathlib import Path
 
@@ -27,7 +34,8 @@ from colmo.evaluation import FAST, REFEREE, EvalRequest
 from colmo.executor import LocalExecutor
 from colmo.program import parametrize
 from colmo.rollout import episode_seeds, evaluate_program
-from colmo.sandbox.namespace import Program
+from colmo.sandbox.namespace import Program, template
+from colmo.sandbox.referee import LOCKSTEP, referee_evaluation, serve_policy
 from colmo.specs import load_spec
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -63,12 +71,63 @@ def measure_task(executor: LocalExecutor, task: str, seeds: tuple[int, ...], rou
     return times
 
 
+def cpu_seconds(task: str, seeds: tuple[int, ...], rounds: int) -> dict[str, list[float]]:
+    """CPU seconds per evaluation, unconfined: the fast path, and the referee's worker and child."""
+    spec = load_spec(f"{task}.py")
+    program = parametrize((EXAMPLES / f"paper_{task}.py").read_text())
+    envs = [spec.make_environment() for _ in range(min(len(seeds), LOCKSTEP))]
+    for name in spec.allowed_imports:
+        template(name)
+    trusted = Program(program.skeleton, spec.allowed_imports, program.values)
+    request = EvalRequest(str(spec.path), (), seeds, program.skeleton, program.values, spec.allowed_imports, mode=REFEREE)
+
+    def fast() -> float:
+        start = time.process_time()
+        evaluate_program(envs[0], trusted.new_policy, seeds)
+        return time.process_time() - start
+
+    def refereed() -> tuple[float, float]:
+        observations_read, observations_write = os.pipe()
+        actions_read, actions_write = os.pipe()
+        child_read, child_write = os.pipe()  # the child's CPU seconds, once it is done
+        pid = os.fork()
+        if not pid:
+            for fd in (observations_write, actions_read, child_read):
+                os.close(fd)
+            start = time.process_time()
+            serve_policy(request, envs[0].action_size, observations_read, actions_write)
+            os.write(child_write, struct.pack("<d", time.process_time() - start))
+            os._exit(0)
+        for fd in (observations_read, actions_write, child_write):
+            os.close(fd)
+        start = time.process_time()
+        evaluation = referee_evaluation(envs, request, actions_read, observations_write, time.monotonic() + 3600)
+        worker = time.process_time() - start
+        assert evaluation.failure is None, evaluation.failure
+        for fd in (actions_read, observations_write):
+            os.close(fd)
+        (child,) = struct.unpack("<d", os.read(child_read, 8))
+        os.close(child_read)
+        os.waitpid(pid, 0)
+        return worker, child
+
+    fast(), refereed()  # warm-up: initial states cached, templates built
+    times: dict[str, list[float]] = {"fast": [], "worker": [], "child": []}
+    for _ in range(rounds):
+        times["fast"].append(fast())
+        worker, child = refereed()
+        times["worker"].append(worker)
+        times["child"].append(child)
+    return times
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--tasks", nargs="+", default=TASKS, choices=TASKS)
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--budget", type=int, default=100, help="fast evaluations per tuned program")
+    parser.add_argument("--cpu", action="store_true", help="also the CPU time of the fast path and of the referee's two processes, unconfined")
     args = parser.parse_args()
     if "MENAGERIE_ROOT" not in os.environ and MENAGERIE.is_dir():
         os.environ["MENAGERIE_ROOT"] = str(MENAGERIE)
@@ -86,6 +145,15 @@ def main() -> None:
     print("|---|---|---|---|---|---|")
     for task, floor, fast, referee, ratio, share in rows:
         print(f"| {task} | {floor:.3f} | {fast:.3f} | {referee:.3f} | {ratio:.2f}x | {share:.1%} |")
+    if args.cpu:
+        print(f"\nCPU seconds per evaluation, unconfined, medians of {args.rounds} rounds:\n")
+        print("| task | fast | referee: worker + child | referee / fast |")
+        print("|---|---|---|---|")
+        for task in args.tasks:
+            times = cpu_seconds(task, seeds, args.rounds)
+            fast, worker, child = (statistics.median(times[name]) for name in ("fast", "worker", "child"))
+            referee = statistics.median(map(sum, zip(times["worker"], times["child"])))
+            print(f"| {task} | {fast:.3f} | {worker:.3f} + {child:.3f} | {referee / fast:.2f}x |", flush=True)
 
 
 if __name__ == "__main__":
