@@ -85,7 +85,8 @@ def comparison_lines(sweep_dir: Path, jobs: list[JobOutcome], shown_dir: Optiona
         lines.append(f"  {job.number:>3}  {variant:<{width}}  {best:>8}  {heldout:>8}  {job.summary.get('samples', 0):>7}")
     tracked = [job for job in jobs if job.tracking is not None]
     if tracked:
-        experiments = ",".join(dict.fromkeys(job.tracking.get("experiment") or job.task for job in tracked))
+        names = list(dict.fromkeys(job.tracking.get("experiment") or job.task for job in tracked))
+        experiments = names[0] if len(names) == 1 else f"[{','.join(names)}]"  # a Hydra list: a,b would be a sweep
         uri = tracked[0].tracking.get("tracking_uri")
         lines.append(f"report: colmo-report experiment={experiments} sweep={sweep_id(sweep_dir)}" + (f" tracking_uri={uri}" if uri else ""))
     return lines

@@ -8,11 +8,13 @@ import tempfile
 from pathlib import Path
 
 import pytest
-from conftest import compose
+from conftest import compose, run_colmo
 from mlflow.entities import Metric
 from PIL import Image
 
-from colmo.report import AXES, default_out, main, mean_std, read_runs
+from colmo.errors import ConfigError
+from colmo.report import AXES, default_out, mean_std, read_runs
+from colmo.report.__main__ import make_report
 from colmo.track import flatten, open_experiment
 
 START = 1_700_000_000_000  # ms; runs start a minute apart, in the order they are logged
@@ -79,11 +81,11 @@ def store(tmp_path_factory):
     return cwd, client
 
 
-def report(cwd: Path, monkeypatch, capsys, *args: str) -> str:
+def report(cwd: Path, monkeypatch, *args: str) -> str:
+    """The Markdown of `colmo-report experiment=pendulum <args>`, run in `cwd` (the app's own
+    command line is run in test_bad_command_lines_fail_in_one_line)."""
     monkeypatch.chdir(cwd)
-    main(["experiment=pendulum", *args])
-    out = capsys.readouterr().out.strip()
-    return (cwd / out).read_text()
+    return (cwd / make_report(compose("report", "experiment=pendulum", *args))).read_text()
 
 
 def table(markdown: str, heading: str) -> list[list[str]]:
@@ -94,9 +96,9 @@ def table(markdown: str, heading: str) -> list[list[str]]:
     return [[cell.strip() for cell in row.strip("|").split("|")] for row in rows if not row.startswith("|---")]
 
 
-def test_table_one_has_training_and_heldout_rewards_over_the_seeds(store, monkeypatch, capsys):
+def test_table_one_has_training_and_heldout_rewards_over_the_seeds(store, monkeypatch):
     cwd, _ = store
-    rows = table(report(cwd, monkeypatch, capsys, "out=table"), "Table I")
+    rows = table(report(cwd, monkeypatch, "out=table"), "Table I")
     assert rows[0] == ["Task", "State dim", "Action dim", "GFO", "Reward, no GFO", "Reward, GFO", "Held-out, no GFO", "Held-out, GFO",
                        "Target", "Samples to target, no GFO", "Samples to target, GFO"]
     assert len(rows) == 2
@@ -107,9 +109,9 @@ def test_table_one_has_training_and_heldout_rewards_over_the_seeds(store, monkey
     assert row[9] == "not reached (0/2 seeds)" and row[10] == "8 (1/2 seeds)"
 
 
-def test_every_run_is_accounted_for(store, monkeypatch, capsys):
+def test_every_run_is_accounted_for(store, monkeypatch):
     cwd, _ = store
-    markdown = report(cwd, monkeypatch, capsys, "out=accounted")
+    markdown = report(cwd, monkeypatch, "out=accounted")
     assert "6 search runs read from MLflow" in markdown and "4 count, 2 left out" in markdown
     runs = table(markdown, "Runs")
     assert sorted(r[0] for r in runs[1:]) == sorted(run.name for run in COUNTED)
@@ -154,34 +156,43 @@ def test_settings_that_differ_name_the_variants(store):
     ]
 
 
-def test_the_report_goes_to_a_new_directory_and_never_overwrites_one(store, monkeypatch, capsys):
+def test_the_report_goes_to_a_new_directory_and_never_overwrites_one(store, monkeypatch):
     cwd, _ = store
     monkeypatch.chdir(cwd)
-    main(["experiment=pendulum", "axis=seconds"])
-    path = Path(capsys.readouterr().out.strip())
+    path = make_report(compose("report", "experiment=pendulum", "axis=seconds"))
     assert path.parent.parent == Path("reports") and path.parent.name.startswith("pendulum_")
     assert "x: seconds of search (wall clock)" in path.read_text()
     with Image.open(cwd / path.parent / "best_so_far.png") as image:
         assert image.format == "PNG" and 600 <= image.size[0] <= 3000
-    with pytest.raises(SystemExit) as exit:
-        main(["experiment=pendulum", f"out={path.parent}"])
-    assert exit.value.code == 2 and "already holds a report" in capsys.readouterr().err
+    with pytest.raises(ConfigError, match="already holds a report"):
+        make_report(compose("report", "experiment=pendulum", f"out={path.parent}"))
     assert default_out(["pendulum", "cheetah"]).name.startswith("pendulum+cheetah_")
 
 
-def test_bad_command_lines_fail_in_one_line(store, tmp_path, monkeypatch, capsys):
+def test_by_default_best_so_far_is_drawn_against_model_calls_and_against_seconds(store, monkeypatch):
+    cwd, _ = store
+    markdown = report(cwd, monkeypatch, "out=both")
+    assert "x: model calls (programs sampled)." in markdown and "x: seconds of search (wall clock)." in markdown
+    assert "(best_so_far.png)" in markdown and "(best_so_far_seconds.png)" in markdown
+    for name in ("best_so_far.png", "best_so_far_seconds.png"):
+        with Image.open(cwd / "both" / name) as image:
+            assert image.format == "PNG"
+
+
+def test_bad_command_lines_fail_in_one_line(store, tmp_path):
     cwd, _ = store
     for where, args, message in (
         (cwd, ["experiment=nope"], "no MLflow experiment named 'nope'"),
-        (cwd, ["experiment=pendulum", "axis=hours"], "axis must be one of samples, evaluations, seconds"),
+        (cwd, ["experiment=pendulum", "axis=hours"], "axis must be one or more of samples, evaluations, seconds"),
         (tmp_path, ["experiment=pendulum"], "no tracking database"),
-        (tmp_path, ["out=x"], "experiment=NAME is required"),
-        (tmp_path, ["colour=red"], "expected one of experiment=..."),
+        (tmp_path, ["out=x"], "missing value for experiment"),
+        (tmp_path, ["colour=red"], "Key 'colour' not in 'ReportConfig'"),
+        (cwd, ["experiment=pendulum,cheetah"], "experiment=pendulum,cheetah is a sweep: add -m"),
     ):
-        monkeypatch.chdir(where)
-        with pytest.raises(SystemExit) as exit:
-            main(args)
-        assert exit.value.code == 2 and message in capsys.readouterr().err
+        run = run_colmo("colmo.report", *args, cwd=where)
+        errors = [line for line in run.stderr.splitlines() if line.startswith("colmo: error: ")]
+        assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
+        assert len(errors) == 1 and message in errors[0], run.stderr
 
 
 def test_mean_std_is_the_sample_std_and_a_lone_mean():

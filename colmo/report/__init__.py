@@ -2,7 +2,7 @@
 Fig. 4 best-so-far curves, and the best policy of each variant.
 
     colmo-report experiment=pendulum [experiment=cheetah ...] [sweep=latest|all|NAME]
-                 [axis=samples|evaluations|seconds] [out=DIR] [tracking_uri=URI]
+                 [axis=samples,seconds] [out=DIR] [tracking_uri=URI]
 
 `experiment` (repeatable, or comma-separated) names MLflow experiments (colmo names them after
 the task); `tracking_uri` defaults to the tracker's `sqlite:///mlruns.db` in the working
@@ -26,19 +26,18 @@ Seeds are aggregated as mean ± sample std.
   line per run, where each run's samples and time went (valid programs, duplicates, tokens/s,
   generator and evaluator busy), the runs left out and why, and each variant's best policy;
 - `best_so_far.png`: one panel per task, x = model calls (programs sampled), candidate
-  evaluations or seconds of search (`axis`, so GFO and no GFO compare per sample or per unit
-  of compute); one colour per variant, named in the legend: its mean over seeds (thick), the
-  band from its lowest to its highest seed, each seed thin; a curve of one point is a marker;
-  dotted: the target.
+  evaluations or seconds of search (the first of `axis`, a comma-separated list of
+  samples, evaluations, seconds; default `samples,seconds`); one colour per variant, named in
+  the legend: its mean over seeds (thick), the band from its lowest to its highest seed, each
+  seed thin; a curve of one point is a marker; dotted: the target;
+- `best_so_far_<axis>.png`: the same against each further axis, so GFO and no GFO compare
+  per model call and per second (what GFO spends to make each sample count).
 """
 
 from __future__ import annotations
 
-import argparse
 import datetime
-import os
 import re
-import sys
 from pathlib import Path
 from typing import Optional, Sequence
 
@@ -48,11 +47,15 @@ from colmo.report.figure import figure
 from colmo.report.selection import AXES, LATEST, group, read_runs
 from colmo.report.tables import best_policies, generation_table, left_out_lines, mean_std, runs_table, table_one
 from colmo.store import BEST_SO_FAR_PLOT
-from colmo.track import connect, default_tracking_uri, sqlite_path
 
-__all__ = ["AXES", "default_out", "main", "mean_std", "read_runs", "write_report"]
+__all__ = ["AXES", "default_out", "mean_std", "read_runs", "write_report"]
 
 REPORT_FILE = "report.md"
+DEFAULT_AXES = ("samples", "seconds")
+
+
+def plot_file(axis: str, first: bool) -> str:
+    return BEST_SO_FAR_PLOT if first else f"best_so_far_{axis}.png"
 
 
 def default_out(experiments: Sequence[str], now: Optional[datetime.datetime] = None) -> Path:
@@ -62,19 +65,28 @@ def default_out(experiments: Sequence[str], now: Optional[datetime.datetime] = N
 
 
 def write_report(
-    client: MlflowClient, experiments: Sequence[str], out: Path, axis: str = "samples", command: str = "", sweep: str = LATEST
+    client: MlflowClient, experiments: Sequence[str], out: Path, axes: Sequence[str] = DEFAULT_AXES, command: str = "",
+    sweep: str = LATEST,
 ) -> Path:
-    """Write `report.md` and `best_so_far.png` of one sweep (`sweep`: latest, all or a parent
-    run's name) into the new directory `out`; return the Markdown file. `ValueError` if `out`
-    already holds a report, the sweep does not exist or no run can be used."""
+    """Write `report.md` and a best-so-far figure per axis of `axes` (the tables read the runs
+    as the first axis does) of one sweep (`sweep`: latest, all or a parent run's name) into the
+    new directory `out`; return the Markdown file. `ValueError` if `out` already holds a
+    report, the sweep does not exist or no run can be used."""
     if (out / REPORT_FILE).exists():
         raise ValueError(f"{out} already holds a report: choose another out= (a report never overwrites one)")
+    axis, *further = axes
     reading = read_runs(client, experiments, axis, sweep)
     tasks = group(reading.curves)
     if not tasks:
         raise ValueError(f"no finished runs with metrics in experiment(s) {', '.join(experiments)}")
     out.mkdir(parents=True, exist_ok=True)
     figure(tasks, axis).savefig(out / BEST_SO_FAR_PLOT, dpi=130)
+    plots = [f"![best so far against {AXES[axis][1]}]({BEST_SO_FAR_PLOT})", "", f"x: {AXES[axis][1]}."]
+    for other in further:
+        other_tasks = group(read_runs(client, experiments, other, sweep).curves)
+        if other_tasks:  # runs logged before colmo logged the axis's metric have no curve on it
+            figure(other_tasks, other).savefig(out / plot_file(other, first=False), dpi=130)
+            plots += ["", f"![best so far against {AXES[other][1]}]({plot_file(other, first=False)})", "", f"x: {AXES[other][1]}."]
     count = len(reading.curves)
     lines = [
         f"# colmo report: {', '.join(experiments)}",
@@ -95,9 +107,9 @@ def write_report(
         "",
         "## Best so far",
         "",
-        f"![best-so-far curves]({BEST_SO_FAR_PLOT})",
+        *plots,
         "",
-        f"x: {AXES[axis][1]}. One colour per variant (legend): thick, the mean over seeds; band, lowest to highest seed; "
+        "One colour per variant (legend): thick, the mean over seeds; band, lowest to highest seed; "
         "thin, each seed; a marker, a run of one batch.",
         "",
         "## Runs",
@@ -119,50 +131,3 @@ def write_report(
     path = out / REPORT_FILE
     path.write_text("\n".join(lines).rstrip() + "\n")
     return path
-
-
-_KEYS = ("experiment", "sweep", "axis", "out", "tracking_uri")
-
-
-def _setting(text: str) -> tuple[str, str]:
-    key, sep, value = text.partition("=")
-    if not sep or key not in _KEYS or not value:
-        raise argparse.ArgumentTypeError(f"expected one of {', '.join(k + '=...' for k in _KEYS)}, got {text!r}")
-    return key, value
-
-
-def main(argv: Optional[Sequence[str]] = None) -> None:
-    invoked = Path(sys.argv[0]).name
-    prog = invoked if invoked == "colmo-report" else "python -m colmo.report"
-    parser = argparse.ArgumentParser(
-        prog=prog, description=__doc__.split("\n\n")[0],
-        epilog=f"example: {prog} experiment=pendulum axis=seconds",
-    )
-    parser.add_argument(
-        "settings", nargs="+", type=_setting, metavar="key=value",
-        help="experiment=NAME[,NAME] (required, repeatable); sweep=latest|all|NAME (which sweep: the latest, every run, "
-        "or the one whose parent run is NAME; default latest); axis=samples|evaluations|seconds (x of the figure, "
-        "default samples); out=DIR (a new directory; default reports/<experiments>_<date>_<time>); "
-        "tracking_uri=URI (default sqlite:///mlruns.db in the working directory)",
-    )
-    args = list(sys.argv[1:] if argv is None else argv)
-    settings = parser.parse_args(args).settings
-    experiments = [name for key, value in settings if key == "experiment" for name in value.split(",") if name]
-    if not experiments:
-        parser.error("experiment=NAME is required")
-    options = dict(settings)
-    axis = options.get("axis", "samples")
-    if axis not in AXES:
-        parser.error(f"axis must be one of {', '.join(AXES)}, got {axis!r}")
-    os.environ.setdefault("MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR", "false")  # one bar per policy file is noise
-    uri = options.get("tracking_uri") or default_tracking_uri(Path.cwd())
-    database = sqlite_path(uri)
-    if database is not None and not database.is_file():
-        parser.error(f"no tracking database at {database}: run a search first, or pass tracking_uri=")
-    out = Path(options["out"]) if "out" in options else default_out(experiments)
-    try:
-        path = write_report(connect(uri), experiments, out, axis, f"{prog} {' '.join(args)}", options.get("sweep", LATEST))
-    except ValueError as error:
-        print(f"{prog}: error: {error}", file=sys.stderr)
-        sys.exit(2)
-    print(path)
