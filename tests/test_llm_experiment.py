@@ -1,0 +1,68 @@
+"""`scripts/llm_experiment.py`: which runs it starts, skips and resumes, and its report from the
+run directories (no search runs here: the directories are written as a search leaves them)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "llm_experiment.py"
+_spec = importlib.util.spec_from_file_location("llm_experiment", SCRIPT)
+llm_experiment = sys.modules["llm_experiment"] = importlib.util.module_from_spec(_spec)  # dataclasses look their module up
+_spec.loader.exec_module(llm_experiment)
+
+
+def write_run(run_dir: Path, seed: int, best: float, stop_reason: str = "max_samples", calls: int = 48, evaluated: int = 30) -> None:
+    (run_dir / ".hydra").mkdir(parents=True)
+    (run_dir / ".hydra" / "config.yaml").write_text(f"seed: {seed}\ntask:\n  name: pendulum\n  target_score: 400.0\n")
+    (run_dir / "programs.db").write_bytes(b"")
+    summary = dict(
+        samples=calls, programs_evaluated=evaluated, duplicate_rate=0.25, valid_program_rate=0.9, failures=2, unusable_outputs=1,
+        best_score=best, best_heldout_score=None if seed == 2 else best - 10, best_so_far=[[0, 1.0], [12, best - 50], [40, best]],
+        stop_reason=stop_reason, seconds=600.0,
+    )
+    (run_dir / "summary.json").write_text(json.dumps(summary))
+
+
+def test_finished_runs_are_skipped_stopped_ones_resumed_new_ones_started(tmp_path, monkeypatch):
+    write_run(tmp_path / "gfo-none" / "s0", 0, 100.0)
+    write_run(tmp_path / "gfo-none" / "s1", 1, 100.0, stop_reason="interrupted")
+    commands = []
+    monkeypatch.setattr(llm_experiment.subprocess, "call", lambda command: commands.append(command) or 0)
+    assert llm_experiment.run_all(tmp_path, ["gfo=none"], [0, 1, 2], ["task=pendulum"]) == 0
+    assert [command[3:] for command in commands] == [
+        ["task=pendulum", "gfo=none", "seed=1", f"hydra.run.dir={tmp_path / 'gfo-none' / 's1'}", f"resume={tmp_path / 'gfo-none' / 's1'}"],
+        ["task=pendulum", "gfo=none", "seed=2", f"hydra.run.dir={tmp_path / 'gfo-none' / 's2'}"],
+    ]
+
+
+def test_a_failing_run_stops_the_experiment_with_its_status(tmp_path, monkeypatch):
+    commands = []
+    monkeypatch.setattr(llm_experiment.subprocess, "call", lambda command: commands.append(command) or 2)
+    assert llm_experiment.run_all(tmp_path, ["gfo=none", "gfo=oneplusone gfo.budget=20"], [0, 1], []) == 2
+    assert len(commands) == 1
+    assert llm_experiment.variant_dir("gfo=oneplusone gfo.budget=20") == "gfo-oneplusone_gfo.budget-20"  # Hydra takes it in a path
+
+
+def test_the_report_counts_model_calls_per_seed_and_compares_two_variants(tmp_path):
+    for seed, best in enumerate([50.0, 60.0, 70.0]):
+        write_run(tmp_path / "gfo-none" / f"s{seed}", seed, best)
+    for seed, best in enumerate([190.0, 200.0, 210.0]):
+        write_run(tmp_path / "gfo-oneplusone" / f"s{seed}", seed, best)
+    write_run(tmp_path / "gfo-oneplusone" / "s3", 3, 999.0, stop_reason="interrupted")  # not finished: not counted
+    markdown = llm_experiment.write_report(tmp_path, tmp_path / "report.md", "report").read_text()
+    assert "| gfo-none | 0 | 48 | 30 | 12 | 3 | 62.5 | 50.0 | 40.0 | — | 600 |" in markdown
+    assert "| gfo-oneplusone | 3 | 48 ± 0 | 30.0 ± 0.0 | 62.5 ± 0.0 | 25.0 ± 0.0% | 90.0 ± 0.0% | 200.0 ± 10.0 | 185.0 ± 7.1 (2/3 seeds) |" in markdown
+    assert "gfo gfo-oneplusone" not in markdown and "gfo-oneplusone − gfo-none: +140.0" in markdown and "excludes 0" in markdown
+    assert "gfo-oneplusone/s3`: stopped (interrupted)" in markdown
+    assert (tmp_path / "best_so_far.png").stat().st_size > 0
+
+
+def test_the_bootstrap_interval_of_equal_groups_includes_zero():
+    difference, low, high = llm_experiment.bootstrap_difference([1.0, 5.0, 9.0], [1.0, 5.0, 9.0])
+    assert difference == 0.0 and low < 0 < high
+    assert llm_experiment.bootstrap_difference([1.0, 2.0], [11.0, 12.0]) == pytest.approx((10.0, 9.0, 11.0))
