@@ -93,11 +93,15 @@ class Evaluation:
         return json.dumps(fields).encode()
 
     @classmethod
-    def from_bytes(cls, data: bytes, request: Optional[EvalRequest] = None) -> "Evaluation":
+    def from_bytes(
+        cls, data: bytes, request: Optional[EvalRequest] = None, horizon: Optional[int] = None, max_abs_reward: Optional[float] = None,
+    ) -> "Evaluation":
         """An evaluation sent by a sandbox process, checked field by field: it is data only,
-        and with `request` it must fit it (at most one return per seed, at most
-        `_MAX_EPISODE_STEPS` control steps per seed, or the probe's `steps`). `ValueError`
-        (saying what is wrong) if it is not a well-formed evaluation."""
+        and with `request` it must fit it: one return per seed (fewer only for a failure, or
+        racing where the request races), at most `horizon` (else `_MAX_EPISODE_STEPS`) control
+        steps per seed, or the probe's `steps`, and each return within what that many steps
+        earn at `max_abs_reward` a step, if the task knows it (else `_MAX_ABS_RETURN`).
+        `ValueError` (saying what is wrong) if it is not a well-formed evaluation."""
         try:
             reply = json.loads(data)
         except RecursionError:  # nested deeper than the decoder's stack: no evaluation is
@@ -116,11 +120,18 @@ class Evaluation:
         if any(abs(r) > _MAX_ABS_RETURN for r in returns):
             raise ValueError(f"a return beyond {_MAX_ABS_RETURN:g}")
         if request is not None:
-            episodes = max(len(request.seeds), 1)
-            if len(returns) > episodes:
+            episodes = len(request.seeds)
+            if len(returns) > episodes or (len(returns) < episodes and failure is None and not (raced_out and request.race is not None)):
                 raise ValueError(f"{len(returns)} returns for {episodes} episodes")
-            if steps > episodes * (request.steps or _MAX_EPISODE_STEPS):
+            if raced_out and request.race is None:
+                raise ValueError("raced out of a request that does not race")
+            episode_steps = min(request.steps or _MAX_EPISODE_STEPS, horizon or _MAX_EPISODE_STEPS)
+            if steps > max(episodes, 1) * episode_steps:
                 raise ValueError(f"{'a huge number of' if steps > 10**18 else steps} control steps for {episodes} episodes")
+            if max_abs_reward is not None:
+                bound = episode_steps * max_abs_reward * (1 + 1e-9)  # a sum of that many rewards, rounded
+                if any(abs(r) > bound for r in returns):
+                    raise ValueError(f"a return beyond the {bound:.6g} that {episode_steps} steps earn")
         return cls(tuple(returns), failure_reason(failure) if failure else None, steps, raced_out, seconds, trace)
 
 

@@ -13,8 +13,12 @@ object-array exploit would): its system calls must be stopped by the kernel laye
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
+import json
+import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -25,6 +29,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import children_of, compose, last_json_line, same_outcome, wait_for
+from mlflow import MlflowClient
 
 from colmo.evaluation import FAST, REFEREE, EvalRequest, Evaluation
 from colmo.executor import LocalExecutor
@@ -35,6 +40,8 @@ from colmo.rollout import episode_seeds
 from colmo.search import Search
 from colmo.specs import load_spec
 from colmo.store import STORE_FILE, ProgramStore
+from colmo.track.backend import open_experiment
+from colmo.track.runs import MlflowTracker, TrackedRun
 
 TIMEOUT_S = 3
 MEMORY_MB = 512
@@ -451,6 +458,11 @@ FORGED_REPLIES = {
     "a huge return": '{"returns": [1e300], "failure": null, "steps": 1, "raced_out": false, "seconds": 0.0}',
     "more returns than episodes": '{"returns": [' + ", ".join(["1.0"] * 1000) + '], "failure": null, "steps": 1, "raced_out": false, "seconds": 0.0}',
     "JSON nested 400,000 deep": "[" * 400_000,
+    "no return for its episode": '{"returns": [], "failure": null, "steps": 1000, "raced_out": false, "seconds": 0.0}',
+    "raced out of a request that does not race": '{"returns": [1.0], "failure": null, "steps": 1, "raced_out": true, "seconds": 0.0}',
+    # A pendulum episode is 1000 steps of a reward in [0, 1].
+    "more steps than the horizon": '{"returns": [1.0], "failure": null, "steps": 1001, "raced_out": false, "seconds": 0.0}',
+    "more than the horizon's rewards": '{"returns": [1000.5], "failure": null, "steps": 1000, "raced_out": false, "seconds": 0.0}',
 }
 
 
@@ -474,7 +486,7 @@ def test_a_tampering_programs_fast_score_is_not_its_initial_score(sandbox, basel
     from colmo.program import parametrize
 
     forge = (
-        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.rollout'], 'rollout', lambda env, policy, seed, steps=None: (float('400002.6'), int('1000')))\n"
+        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.rollout'], 'rollout', lambda env, policy, seed, steps=None: (float('987.654'), int('1000')))\n"
         + NOTHING
     )
     program = parametrize(forge)  # not read_program: intake drops module-level statements, an escape would not
@@ -483,7 +495,7 @@ def test_a_tampering_programs_fast_score_is_not_its_initial_score(sandbox, basel
     result = optimize_program(program, CandidateEvaluator(sandbox.executor, evaluator, program.skeleton), gfo, seed=0)
     assert result.failure is not None and result.failure.startswith("tampering: "), result.failure
     assert result.initial.failure == result.failure and result.initial.returns == ()
-    assert "400002" not in result.failure
+    assert "987.6" not in result.failure
     assert_unharmed(sandbox, baseline)
 
 
@@ -500,3 +512,94 @@ def test_a_child_that_pre_sends_its_actions_and_stops_reading_times_out(sandbox,
     evaluation = sandbox.evaluate(presend + NOTHING, spec=escaped_spec, episodes=5, imports=imports, mode=REFEREE)
     assert evaluation.failure is not None and evaluation.failure.startswith("timeout: "), evaluation.failure
     assert_unharmed(sandbox, baseline)
+
+
+# -- a forged score through a search, its resume and MLflow ---------------------------------------
+
+# Scores an escaped policy forges in its fast-path replies: one a pendulum episode can earn (the
+# referee refutes it: tampering), one it cannot (more than the horizon's rewards: a malformed reply).
+FORGED_SCORES = (987.654, 400002.6)
+NUMBER = re.compile(r"\d+(?:\.\d*)?(?:e[+-]?\d+)?")
+
+
+def forged_numbers(text: str) -> list[str]:
+    """The numbers written in `text` that are one of `FORGED_SCORES`, as printed to any precision."""
+    return [n for n in NUMBER.findall(text) if any(math.isclose(float(n), s, rel_tol=1e-4) for s in FORGED_SCORES)]
+
+
+def forging_answer(score: float, episodes: int) -> str:
+    """A model's answer whose policy, once called, replaces its process's evaluation reply with
+    one claiming `score` in each episode (inside the policy: intake keeps only imports and
+    definitions). The number is split in its source, which is stored and tracked as written."""
+    returns = ", ".join([repr(score)] * episodes)
+    reply = '{"returns": [%s], "failure": null, "steps": %d, "raced_out": false, "seconds": 0.0}' % (returns, 1000 * episodes)
+    source = "'" + reply.replace(repr(score), repr(score)[:3] + "' + '" + repr(score)[3:]) + "'"
+    return (
+        "import sys\n\n\ndef policy(obs):\n"
+        "    sys.modules['builtins'].setattr(sys.modules['colmo.evaluation'].Evaluation, 'to_bytes', "
+        f"lambda self: ({source}).encode())\n    return 0.0\n"
+    )
+
+
+class ListedAnswers(Generator):
+    """The model's answers, in order, one per sample."""
+
+    def __init__(self, answers: list[str]):
+        super().__init__(cfg=None, seed=0)
+        self.answers = list(answers)
+
+    def generate(self, prompt, n):
+        return [Generation(self.answers.pop(0), "listed") for _ in range(n)]
+
+
+def tracked_search(cfg, run_dir: Path, uri: str, answers: list[str]) -> str:
+    """Run a search with an MLflow run of its own (the observer `colmo` gives it); its run id."""
+    client, experiment_id = open_experiment(uri, "forged")
+    run = TrackedRun(client, experiment_id, client.create_run(experiment_id).info.run_id, "forged", None, None, None)
+    Search(cfg, run_dir, (MlflowTracker(run, table_every_s=0.0),), generator=ListedAnswers(answers)).run()
+    return run.run_id
+
+
+def mlflow_text(client, run_id: str, into: Path) -> str:
+    """Everything MLflow shows of a run as text: params, tags, every metric's history and the
+    text artifacts (the programs table and page, summary.json, best_policy.py)."""
+    run = client.get_run(run_id)
+    history = [m.value for key in run.data.metrics for m in client.get_metric_history(run_id, key)]  # repr: every digit
+    artifacts = Path(client.download_artifacts(run_id, "", str(into)))
+    texts = [path.read_text() for path in artifacts.rglob("*") if path.suffix in (".json", ".html", ".py", ".csv")]
+    return "\n".join([json.dumps(run.data.params), json.dumps(run.data.tags), *map(repr, history), *texts])
+
+
+def test_a_forged_score_is_never_stored_nor_tracked_not_even_after_a_resume(tmp_path, escaped_spec, monkeypatch):
+    """Escaped policies forge their fast-path replies through a search tracked in MLflow: a score
+    an episode can earn (refuted by the referee), one it cannot, and one return for two episodes
+    (which once passed as a raced-out evaluation, the referee's two returns not compared with it).
+    Each is failed, and no forged number is in the store, summary.json or MLflow, before or after
+    the search is resumed with a well-behaved program."""
+    monkeypatch.setenv("MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR", "false")
+    uri = f"sqlite:///{tmp_path / 'mlruns.db'}"
+    run_dir = tmp_path / "run"
+    common = (
+        f"task.spec={escaped_spec}", "task.episodes=2", "gfo.budget=4", "llm.batch_size=1", "search.queue_size=1",
+        "search.duplicate_retries=0", "executor.workers=1", "tracker=none", "search.progress=false", "evaluation.episodes=2",
+        "evaluation.render=false", "evaluation.simplify=false",
+    )  # fmt: skip
+    forgers = [forging_answer(score, 2) for score in FORGED_SCORES] + [forging_answer(FORGED_SCORES[0], 1)]
+    first = tracked_search(compose("search", "search.max_samples=3", *common), run_dir, uri, forgers)
+    resumed = tracked_search(compose("search", "search.max_samples=4", f"resume={run_dir}", *common), run_dir, uri, [GOOD])
+
+    records = {record.sample: record for record in ProgramStore(run_dir / STORE_FILE).records()}
+    assert records[3].status == "evaluated" and records[3].score > records[-1].score  # the resume went on
+    within, beyond, short = records[0], records[1], records[2]
+    assert within.status == "failed" and within.failure.startswith("tampering: "), within.failure
+    assert beyond.status == "failed" and beyond.failure.startswith("program: malformed reply: a return beyond the 1000 that 1000 steps earn"), beyond.failure
+    assert short.status == "failed" and short.failure.startswith("program: malformed reply: 1 returns for 2 episodes"), short.failure
+    for record in (within, beyond, short):
+        assert record.score is None and record.initial_score is None  # its returns, if any, are the referee's
+    stored = json.dumps([dataclasses.asdict(record) for record in records.values()]) + (run_dir / "summary.json").read_text()
+    assert not forged_numbers(stored)
+    client = MlflowClient(uri)
+    for run_id in (first, resumed):
+        text = mlflow_text(client, run_id, tmp_path / run_id)
+        assert "tampering: " in text or run_id == resumed  # the programs table shows the failures ...
+        assert not forged_numbers(text), run_id  # ... and no forged number

@@ -48,6 +48,7 @@ class UnitreeA1(MujocoEnvironment):
     ±0.05 rad added to each joint angle (zero velocity); the physics timestep is set to 1 ms.
     """
 
+    max_abs_reward = 1.0  # rewards lie in [0, 1]
     observation_size = 27
 
     def __init__(self, horizon: int = 1000):

@@ -20,6 +20,7 @@ class BallInCup(MujocoEnvironment):
     0 otherwise, which is also the paper's reward.
     """
 
+    max_abs_reward = 1.0  # rewards lie in [0, 1]
     observation_size = 8
 
     def __init__(self, horizon: int = 1000):

@@ -36,6 +36,9 @@ class Environment(abc.ABC):
     observation_size: int
     action_size: int
     horizon: int = 1000
+    # The most |reward| one step can earn, where the task knows it: a sandbox's reply claiming a
+    # return beyond horizon x this is forged (None: only colmo's fixed bound applies).
+    max_abs_reward: float | None = None
 
     @abc.abstractmethod
     def reset(self, seed: int) -> np.ndarray:

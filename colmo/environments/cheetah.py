@@ -24,6 +24,7 @@ class Cheetah(MujocoEnvironment):
     (`1 - (10 - v) / 10`), so it matches dm_control bit for bit and `v / 10` to within 1e-15.
     """
 
+    max_abs_reward = 1.0  # rewards lie in [0, 1]
     observation_size = 17
 
     def __init__(self, horizon: int = 1000):

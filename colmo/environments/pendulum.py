@@ -17,6 +17,7 @@ class PendulumSwingup(MujocoEnvironment):
     dm_control's own swingup task uses 8 degrees (`angle_bound=math.radians(8)` reproduces it).
     """
 
+    max_abs_reward = 1.0  # rewards lie in [0, 1]
     observation_size = 3
 
     def __init__(self, angle_bound: float = 0.5, horizon: int = 1000):

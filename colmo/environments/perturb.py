@@ -64,6 +64,7 @@ class PerturbedEnvironment(Environment):
         self.observation_size = env.observation_size
         self.action_size = env.action_size
         self.horizon = env.horizon
+        self.max_abs_reward = env.max_abs_reward
         self.control_timestep = env.control_timestep
         model = env.model
         self._nominal = {name: getattr(model, name).copy() for name in _FIELDS}

@@ -77,6 +77,7 @@ class Quadruped(MujocoEnvironment):
     0.5 at standstill, computed with dm_control's arithmetic so that it matches it exactly.
     """
 
+    max_abs_reward = 1.0  # rewards lie in [0, 1]
     observation_size = 78
 
     def __init__(self, reward: str = "paper", horizon: int = 1000):

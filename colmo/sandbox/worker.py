@@ -109,7 +109,7 @@ class Worker:
         if failure:
             return Evaluation(failure=failure)
         try:
-            return Evaluation.from_bytes(data, request)
+            return Evaluation.from_bytes(data, request, env.horizon, env.max_abs_reward)
         except ValueError as error:  # the child ran the program: its reply is the program's
             return Evaluation(failure=f"program: malformed reply: {error}")
 
