@@ -43,14 +43,13 @@ from colmo.answers import AnswerReader, regenerate_duplicates
 from colmo.budget import TimeBudget
 from colmo.config import SearchConfig
 from colmo.database import ProgramDatabase, StoredProgram
-from colmo.environments.perturb import with_perturbation
 from colmo.errors import RunError
 from colmo.evaluation import Evaluator, Executor, ExecutorClosed
 from colmo.executor import make_executor
 from colmo.finish import BestPrograms, finish
 from colmo.generate import GENERATORS, Generation, Generator, GeneratorError, make_generator
 from colmo.generate.probe import ProgramProbe
-from colmo.optimize.tune import calibrated
+from colmo.heldout import training_evaluator
 from colmo.outcomes import SampleOutcomes
 from colmo.program import parametrize
 from colmo.prompt import Prompt, build_prompt
@@ -68,7 +67,6 @@ from colmo.record import (
     Summary,
     Totals,
 )
-from colmo.rollout import episode_seeds
 from colmo.signals import stop_signals
 from colmo.specs import Spec, load_task_spec
 from colmo.store import StoreError, open_run, run_settings, write_outputs
@@ -115,7 +113,6 @@ class Search:
         self.stopping = threading.Event()  # programs in flight stop tuning at their next candidate
         self.outcomes = SampleOutcomes(cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop)
         self.generation_thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
-        self.seeds = episode_seeds(cfg.seed, cfg.task.episodes)
         self.evaluator: Optional[Evaluator] = None
         self.database: Optional[ProgramDatabase] = None
 
@@ -130,11 +127,8 @@ class Search:
             try:
                 if not self._wants_probe():  # a generator that cannot start ends the run before any work
                     self._start_generator()
-                options = with_perturbation(self.cfg.task.env, self.cfg.task.perturb)  # training under task.perturb
-                provisional = Evaluator.for_task(self.spec, options, self.seeds, self.cfg.executor.memory_mb)
                 calibrating = time.perf_counter()
-                starter = parametrize(self.spec.starter_code)
-                self.evaluator = self.outcomes.evaluator = calibrated(self.executor, provisional, starter, self.cfg.executor.timeout_s)
+                self.evaluator = self.outcomes.evaluator = training_evaluator(self.spec, self.cfg.task, self.cfg.executor, self.executor, self.cfg.seed)
                 calibration = time.perf_counter() - calibrating
                 self.database = ProgramDatabase(self.cfg.database, self._starter(), self.cfg.seed)
                 self.budget.plan(self.cfg, calibration, self.program_seconds, self.executor)

@@ -38,12 +38,17 @@ def heldout_score(executor: Executor, evaluator: Evaluator, skeleton: str, param
     return CandidateEvaluator(executor, evaluator, skeleton, executor.n_workers).referee(params, timeout_s)
 
 
-def task_evaluator(task: TaskConfig, executor_cfg: ExecutorConfig, executor: Executor, seed: int) -> tuple[Spec, Evaluator]:
-    """The spec of a configured task and its evaluator on the training episodes of `seed`, with
-    time limits calibrated on the spec's starter policy."""
-    spec = load_task_spec(task.spec)
+def training_evaluator(spec: Spec, task: TaskConfig, executor_cfg: ExecutorConfig, executor: Executor, seed: int) -> Evaluator:
+    """The evaluator of `spec` on the training episodes of `seed` (under `task.perturb`, if
+    set), with time limits calibrated on the spec's starter policy."""
     provisional = Evaluator.for_task(spec, with_perturbation(task.env, task.perturb), episode_seeds(seed, task.episodes), executor_cfg.memory_mb)
-    return spec, calibrated(executor, provisional, parametrize(spec.starter_code), executor_cfg.timeout_s)
+    return calibrated(executor, provisional, parametrize(spec.starter_code), executor_cfg.timeout_s)
+
+
+def task_evaluator(task: TaskConfig, executor_cfg: ExecutorConfig, executor: Executor, seed: int) -> tuple[Spec, Evaluator]:
+    """The spec of a configured task and its `training_evaluator`."""
+    spec = load_task_spec(task.spec)
+    return spec, training_evaluator(spec, task, executor_cfg, executor, seed)
 
 
 def robustness_of(

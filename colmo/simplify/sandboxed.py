@@ -104,7 +104,7 @@ def simplify_program(
     the remaining constants re-tuned (`colmo.simplify.greedy` says exactly what is accepted).
 
     `train_evaluator` is the task's calibrated evaluator on the training episodes
-    (`colmo.heldout.task_evaluator`), `heldout_evaluator` the same on held-out episodes
+    (`colmo.heldout.training_evaluator`), `heldout_evaluator` the same on held-out episodes
     (`colmo.heldout.heldout_evaluator`); every score in the result is the referee's. `code` is
     a program as the intake returns it (`colmo.extract.extract_policy`). `batch_size` is the
     number of candidates per executor call (None: `BATCH_PER_WORKER` per worker); `max_rounds`
