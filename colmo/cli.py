@@ -25,6 +25,7 @@ import os
 import sys
 import tempfile
 import textwrap
+import threading
 from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, NoReturn, Optional
@@ -214,10 +215,17 @@ def _exit_now(code: Any) -> NoReturn:
     """End the process once an app has run: the exit handlers run (logging, MLflow, thread
     pools), the interpreter's teardown does not. Tearing down the ~2700 modules a search
     imports (Nevergrad brings pandas, pyarrow, scikit-learn) took 5-35 s on 2 loaded cores,
-    past `search.max_seconds`; everything colmo writes is closed by then."""
+    past `search.max_seconds`; everything colmo writes is closed by then.
+
+    The exit is the interpreter's own up to the teardown, in its order: first the threading
+    module's shutdown (its exit hooks, which stop thread and process pools such as joblib's
+    loky workers, and the join of non-daemon threads), then the `atexit` handlers. With the
+    `atexit` handlers alone, multiprocessing's waited on loky's idle workers for their
+    300 s timeout after every `hydra/launcher=joblib` sweep."""
     if isinstance(code, str):  # sys.exit("message"), as Python itself reports it
         print(code, file=sys.stderr)
         code = 1
+    threading._shutdown()
     atexit._run_exitfuncs()
     sys.stdout.flush()
     sys.stderr.flush()
