@@ -5,7 +5,8 @@ directory of its own and resumable, and their report, read from those directorie
         task=pendulum llm=llamacpp llm.model_path=M.gguf search.max_samples=200
     python scripts/llm_experiment.py report OUT [--out OUT/report.md]
 
-`run` starts the runs one after another, `OUT/<variant>/s<seed>` each (`gfo=none` in `OUT/gfo-none/`): a run whose
+`run` starts the runs one after another, seed by seed (each variant of seed 0, then of seed 1, ...),
+`OUT/<variant>/s<seed>` each (`gfo=none` in `OUT/gfo-none/`): a run whose
 `summary.json` says it reached its limits is skipped, one that stopped before (killed, the
 machine restarted, Ctrl-C) is resumed (`resume=`), so the same command, run again, finishes
 what is left. Overrides after `--` apply to every run; a variant is one or more overrides
@@ -61,10 +62,11 @@ def summary_of(run_dir: Path) -> Optional[dict]:
 
 
 def run_all(out: Path, variants: Sequence[str], seeds: Sequence[int], overrides: Sequence[str]) -> int:
-    """Each (variant, seed) run in turn, skipping finished ones and resuming stopped ones; the
-    exit status of the first run that fails, else 0."""
-    for variant in variants:
-        for seed in seeds:
+    """Each (variant, seed) run in turn, seed by seed (every variant of a seed before the next
+    seed, so that an experiment cut short leaves paired runs), skipping finished ones and
+    resuming stopped ones; the exit status of the first run that fails, else 0."""
+    for seed in seeds:
+        for variant in variants:
             run_dir = out / variant_dir(variant) / f"s{seed}"
             summary = summary_of(run_dir)
             if summary is not None and summary["stop_reason"] in FINISHED:

@@ -40,6 +40,15 @@ def test_finished_runs_are_skipped_stopped_ones_resumed_new_ones_started(tmp_pat
     ]
 
 
+def test_runs_go_seed_by_seed_so_a_cut_short_experiment_leaves_pairs(tmp_path, monkeypatch):
+    commands = []
+    monkeypatch.setattr(llm_experiment.subprocess, "call", lambda command: commands.append(command) or 0)
+    assert llm_experiment.run_all(tmp_path, ["gfo=none", "gfo=oneplusone"], [0, 1], []) == 0
+    assert [(command[3], command[4]) for command in commands] == [
+        ("gfo=none", "seed=0"), ("gfo=oneplusone", "seed=0"), ("gfo=none", "seed=1"), ("gfo=oneplusone", "seed=1"),
+    ]
+
+
 def test_a_failing_run_stops_the_experiment_with_its_status(tmp_path, monkeypatch):
     commands = []
     monkeypatch.setattr(llm_experiment.subprocess, "call", lambda command: commands.append(command) or 2)
