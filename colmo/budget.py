@@ -4,6 +4,13 @@ flight their final scores and the finish its held-out scores, simplification and
 (`colmo.finish.plan_finish`, from the starter's calibration); and the run's estimated
 duration, said in one line before the first batch with the limit that binds.
 
+The deadline depends on how many programs are being tuned: each one in flight at the deadline
+still ends its candidate and scores its rounded constants on the fast path and by the referee.
+So the reserve is for the programs actually in flight, not for a full queue, and a batch is only
+generated (its generation abandoned otherwise) while the run can still drain it
+(`can_start`): near the end the queue empties instead of the whole run stopping a full queue's
+drain early (a 60 s quadruped run used to reserve so much that it searched nothing).
+
 The calibration is a few seconds of a machine whose load changes: while the search runs, the
 workers' recent seconds per evaluation against the calibration's (`load_factor`, at least 1)
 scale what the programs in flight and the finish will cost, and the deadline moves with them
@@ -20,7 +27,7 @@ import threading
 import time
 from collections import deque
 from pathlib import Path
-from typing import Optional
+from typing import Callable, Optional
 
 from colmo.config import SearchConfig
 from colmo.evaluation import Executor
@@ -41,13 +48,15 @@ class TimeBudget:
     """The time of one search from `start` (`time.perf_counter()`) to `end`, its limit (inf
     without `search.max_seconds`), and the search's `deadline` in between: until the starter's
     calibration tells what the finish costs (`plan`), a third of the time at most; then early
-    enough for the finish and the programs in flight at the workers' current speed."""
+    enough for the finish and the drain of the `programs_in_flight()` at the workers' current speed."""
 
-    def __init__(self, max_seconds: float):
+    def __init__(self, max_seconds: float, programs_in_flight: Callable[[], int] = lambda: 0, elapsed: Optional[float] = None):
+        """`elapsed`: seconds of the limit already spent (default: since the process started)."""
         self.max_seconds = max_seconds
+        self.programs_in_flight = programs_in_flight  # programs being tuned now (the search's program threads)
         self.start = time.perf_counter()
-        self.end = self.start - process_seconds() + max_seconds if max_seconds else math.inf
-        self.deadline = self.start + _STARTER_SHARE * (self.end - self.start)
+        self.end = self.start - (process_seconds() if elapsed is None else elapsed) + max_seconds if max_seconds else math.inf
+        self._starter_deadline = self.start + _STARTER_SHARE * (self.end - self.start)
         self.episode_seconds = 0.0  # one referee episode of the starter: what the finish costs per episode
         self.estimated_seconds: Optional[float] = None  # the search by max_samples, before the first batch
         self.load_factor = 1.0  # the workers' recent seconds per evaluation over the calibration's
@@ -57,7 +66,9 @@ class TimeBudget:
         self._recent: deque[tuple[int, float]] = deque()  # (evaluations, busy seconds) of the executor
         self._followed = 0.0  # when the deadline last followed the workers' speed
         self._cfg: Optional[SearchConfig] = None
-        self._in_flight = 0.0  # seconds the programs in flight take past the deadline, at the calibration's speed
+        self._drain_per_round = 0.0  # seconds, at the calibration's speed, for each program per worker in flight at the deadline
+        self._drain_fixed = 0.0  # and for the candidates being evaluated then
+        self._finish_seconds = 0.0  # the finish's plan at the workers' current speed
         self._available = 0.0  # for the finish, at the calibration's speed
 
     @property
@@ -70,15 +81,40 @@ class TimeBudget:
         """One referee episode at the workers' current speed: what `colmo.finish` plans with."""
         return self.episode_seconds * self.load_factor
 
+    @property
+    def deadline(self) -> float:
+        """When the programs in flight now must stop tuning (`time.perf_counter()`)."""
+        return self.deadline_with(0)
+
+    def deadline_with(self, more_programs: int) -> float:
+        """The deadline were `more_programs` more programs in flight: the finish and the drain of
+        every program in flight before the end. Before the plan, a share of the time for the starter."""
+        if self._executor is None:
+            return self._starter_deadline
+        programs = self.programs_in_flight() + more_programs
+        if not programs:
+            return self.end - self._finish_seconds
+        rounds = math.ceil(programs / self._executor.n_workers)  # programs per worker, the last round partly idle
+        return self.end - self._finish_seconds - self.load_factor * (self._drain_fixed + self._drain_per_round * rounds)
+
     def past_deadline(self) -> bool:
-        """Whether the search must stop (programs in flight: at their next candidate); thread-safe."""
+        """Whether the programs in flight must stop (at their next candidate); thread-safe."""
+        self._follow()
+        return time.perf_counter() >= self.deadline
+
+    def can_start(self, programs: int) -> bool:
+        """Whether `programs` more programs could be tuned and drained before the finish: a batch
+        that cannot is not generated (or its generation is abandoned)."""
+        self._follow()
+        return time.perf_counter() < self.deadline_with(programs)
+
+    def _follow(self) -> None:
         now = time.perf_counter()
         if self._executor is not None and now - self._followed >= _LOAD_EVERY_S:
             with self._lock:
                 if now - self._followed >= _LOAD_EVERY_S:
                     self._followed = now
                     self._follow_load()
-        return now >= self.deadline
 
     def plan(self, cfg: SearchConfig, calibration: float, program_seconds: float, executor: Executor) -> None:
         """The run's duration estimated from the starter's calibration (`calibration` seconds
@@ -94,31 +130,31 @@ class TimeBudget:
         plan = plan_finish(cfg, self.episode_seconds, workers)
         limit = "max_samples"
         if self.max_seconds:
-            # Past the deadline each program in flight ends its candidate, then scores its rounded
-            # constants on the fast path and by the referee: three evaluations on every training
-            # episode each (as the calibration's two were; racing's are mostly shorter), on shared workers.
-            self._in_flight = SAFETY * 3 * (calibration / 2) * max(1.0, concurrent_programs / workers)
+            # Past the deadline each program in flight scores its rounded constants on the fast path
+            # and by the referee (the calibration's two evaluations), a worker's programs one after
+            # another; the candidates being evaluated end first (a fast evaluation, often raced short).
+            self._drain_per_round = SAFETY * calibration
+            self._drain_fixed = SAFETY * calibration / 2
             self._cfg, self._executor, self._available = cfg, executor, FINISH_SHARE * max(self.end - time.perf_counter(), 0.0)
             self._recent.append((executor.evaluations_done, executor.busy_seconds))
-            plan = self._set_deadline()
+            plan = self._plan_finish()
             limit = f"max_seconds={self.max_seconds:g}"
-            if self.deadline - time.perf_counter() >= self.estimated_seconds:
+            if self.deadline_with(cfg.llm.batch_size) - time.perf_counter() >= self.estimated_seconds:
                 limit = "max_samples"
         early = ""
         if limit.startswith("max_seconds"):
-            early = f" (search stops {duration(self.end - self.deadline)} early to finish)"
-            if self.deadline <= time.perf_counter():
+            early = f" (search stops {duration(self.end - self.deadline_with(cfg.llm.batch_size))} early to finish)"
+            if not self.can_start(1):
                 early = " (no time left to search: the finish works on the starter)"
         log.info(
             "estimated duration: search %s (%d samples x %.1f s, %d at a time, generation not included), finish %s; limit that binds: %s%s",
             duration(self.estimated_seconds), cfg.search.max_samples, program_seconds, in_parallel, duration(plan.seconds), limit, early,
         )
 
-    def _set_deadline(self) -> FinishPlan:
-        """The deadline that leaves the finish (planned at the current speed) and the programs
-        in flight their time (none if that leaves no time to search); the finish's plan."""
+    def _plan_finish(self) -> FinishPlan:
+        """The finish planned at the workers' current speed; the deadlines leave it its time."""
         plan = plan_finish(self._cfg, self.finish_episode_seconds, self._executor.n_workers, self._available)
-        self.deadline = self.end - plan.seconds - self.load_factor * self._in_flight
+        self._finish_seconds = plan.seconds
         return plan
 
     def _follow_load(self) -> None:
@@ -135,7 +171,7 @@ class TimeBudget:
         factor = max(1.0, (busy - first_busy) / (done - first_done) / self._reference)
         if abs(factor - self.load_factor) >= 0.1:
             self.load_factor = factor
-            self._set_deadline()
+            self._plan_finish()
             log.debug("the workers run %.1fx slower than calibrated: the search stops at %.0f s", factor, self.deadline - self.start)
 
     def finish_by(self) -> float:

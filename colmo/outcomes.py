@@ -8,6 +8,7 @@ evaluation was cancelled (a second Ctrl-C) is stored `interrupted`, for a resume
 from __future__ import annotations
 
 import concurrent.futures
+import threading
 from typing import Callable, Optional
 
 import numpy as np
@@ -36,6 +37,8 @@ class SampleOutcomes:
         self.evaluator: Optional[Evaluator] = None
         self.must_stop = must_stop
         self.threads = concurrent.futures.ThreadPoolExecutor(threads, thread_name_prefix="colmo-program")
+        self._running = 0  # programs submitted whose record is not stored yet
+        self._count_lock = threading.Lock()
 
     def optimize(self, program: ParametricProgram, sample: int) -> ProgramResult:
         """Tune and score `program`, with a seed of its own from the run's seed and `sample`."""
@@ -54,7 +57,13 @@ class SampleOutcomes:
             return self._settled(SampleRecord.of(sample, DUPLICATE, program))
         # Known from now on, so a batch generated before this one is integrated skips it too.
         database.mark_seen(program.key)
+        with self._count_lock:
+            self._running += 1
         return self.threads.submit(self._evaluate, sample, program)
+
+    def running(self) -> int:
+        """Programs being evaluated (tuned, or waiting for a program thread) now; thread-safe."""
+        return self._running
 
     def shutdown(self) -> None:
         """Wait for the program threads (a stopping search has told them to stop)."""
@@ -62,12 +71,16 @@ class SampleOutcomes:
 
     def _evaluate(self, sample: Sample, program: ParametricProgram) -> SampleRecord:
         try:
-            result: Optional[ProgramResult] = self.optimize(program, sample.index)
-        except ExecutorClosed:
-            result = None
-        if result is None or result.failure == CANCELLED:
-            return self._stored(SampleRecord.of(sample, INTERRUPTED, program))
-        return self._stored(SampleRecord.of_result(sample, program, result))
+            try:
+                result: Optional[ProgramResult] = self.optimize(program, sample.index)
+            except ExecutorClosed:
+                result = None
+            if result is None or result.failure == CANCELLED:
+                return self._stored(SampleRecord.of(sample, INTERRUPTED, program))
+            return self._stored(SampleRecord.of_result(sample, program, result))
+        finally:
+            with self._count_lock:
+                self._running -= 1
 
     def _stored(self, record: SampleRecord) -> SampleRecord:
         self.store.add(record)

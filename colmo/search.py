@@ -108,10 +108,10 @@ class Search:
         self.next_sample = self.next_batch = self.in_flight_samples = 0
         self.generation_seconds = 0.0
         self.stop_reason = ""
-        self.budget = TimeBudget(cfg.search.max_seconds)
         self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=cfg.gfo.tunes_constants)
         self.stopping = threading.Event()  # programs in flight stop tuning at their next candidate
         self.outcomes = SampleOutcomes(cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop)
+        self.budget = TimeBudget(cfg.search.max_seconds, self.outcomes.running)
         self.generation_thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
         self.evaluator: Optional[Evaluator] = None
         self.database: Optional[ProgramDatabase] = None
@@ -127,9 +127,11 @@ class Search:
             try:
                 if not self._wants_probe():  # a generator that cannot start ends the run before any work
                     self._start_generator()
-                calibrating = time.perf_counter()
+                # The starter's fast and referee evaluations, side by side on the workers: their
+                # worker seconds (not the wall time) are what the budget's estimates scale.
+                busy = self.executor.busy_seconds
                 self.evaluator = self.outcomes.evaluator = training_evaluator(self.spec, self.cfg.task, self.cfg.executor, self.executor, self.cfg.seed)
-                calibration = time.perf_counter() - calibrating
+                calibration = self.executor.busy_seconds - busy
                 self.database = ProgramDatabase(self.cfg.database, self._starter(), self.cfg.seed)
                 self.budget.plan(self.cfg, calibration, self.program_seconds, self.executor)
                 self.best_so_far = [(0, self.database.best.score)]
@@ -163,7 +165,10 @@ class Search:
             in_flight.append(self._reevaluate(resumed))
         while True:
             while not self._stop_requested() and len(in_flight) < self.cfg.search.queue_size and self._samples_left() > 0:
-                batch = self._generate()
+                size = self._batch_size()
+                if not size:
+                    break
+                batch = self._generate(size)
                 if batch is None:
                     break
                 in_flight.append(batch)
@@ -233,10 +238,9 @@ class Search:
         prompt = build_prompt(spec.description, self.database.select(), constants_tuned=tuned, allowed_imports=spec.allowed_imports)
         return dataclasses.replace(prompt, retry=retry)
 
-    def _generate(self) -> Optional[_Batch]:
-        """Generate the next batch and start evaluating it; None if the search is stopping."""
+    def _generate(self, n: int) -> Optional[_Batch]:
+        """Generate the next batch of `n` samples and start evaluating it; None if the search is stopping."""
         prompt = self._prompt()
-        n = min(self.cfg.llm.batch_size, self._samples_left())
         started = time.perf_counter()
         generations = self._generated(prompt, n)
         if generations is None:
@@ -266,7 +270,7 @@ class Search:
         """The generator's answers to `prompt`; None if the search is stopping or the generator failed."""
         generating = self.generation_thread.submit(self.generator.generate, prompt, n)
         while not generating.done():
-            if self._stop_requested():
+            if self._stop_requested() or not self._fits(n):
                 generating.cancel()
                 self.generator.cancel()
                 return None
@@ -326,10 +330,28 @@ class Search:
         return self.stopping.is_set() or self.budget.past_deadline()
 
     def _stop_requested(self) -> bool:
-        if self.budget.past_deadline() and not self.stop_reason:
-            self.stop_reason = "max_seconds"
+        if self.budget.past_deadline():
+            self.stop_reason = self.stop_reason or "max_seconds"
             self.stopping.set()
         return bool(self.stop_reason)
+
+    def _batch_size(self) -> int:
+        """The next batch's size: `llm.batch_size`, fewer if the samples left or the time left
+        (programs that could still be tuned and drained before the finish) allow fewer; 0 ends
+        the generation (the search stops once the programs in flight are in)."""
+        size = min(self.cfg.llm.batch_size, self._samples_left())
+        while size and not self._fits(size, stop=size == 1):
+            size -= 1
+        return size
+
+    def _fits(self, programs: int, stop: bool = True) -> bool:
+        """Whether `programs` more programs could be tuned and drained before the finish;
+        `stop`: if not, the search generates no more."""
+        if self.budget.can_start(programs):
+            return True
+        if stop:
+            self.stop_reason = self.stop_reason or "max_seconds"
+        return False
 
     def _check_limits(self) -> None:
         limit = self.cfg.search.stop_at_score

@@ -16,8 +16,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from conftest import run_colmo
+from conftest import compose, run_colmo
 
+from colmo.budget import TimeBudget
 from colmo.render import PLOT_FILE, VIDEO_FILE
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, STORE_FILE, SUMMARY_FILE
 
@@ -81,3 +82,46 @@ def test_the_quadruped_run_ends_within_5_s_of_a_60_s_limit(tmp_path):
     run = search(tmp_path, "quadruped", "search.max_seconds=60", timeout=600)
     assert run.summary["stop_reason"] == "max_seconds"
     assert run.wall <= 65, f"the run took {run.wall:.1f} s"
+
+
+
+@dataclass
+class IdleWorkers:
+    """An executor's speed counters as `TimeBudget` reads them, with nothing running."""
+
+    n_workers: int = 2
+    evaluations_done: int = 2
+    busy_seconds: float = 2.0
+
+
+def planned_budget(max_seconds: float, programs: list[int], calibration: float = 2.0) -> TimeBudget:
+    """A budget planned at its start, its programs in flight read from `programs[0]`."""
+    budget = TimeBudget(max_seconds, lambda: programs[0], elapsed=0.0)
+    cfg = compose("search", "task=pendulum", f"search.max_seconds={max_seconds}", "evaluation.render=false", "evaluation.simplify=false")
+    budget.plan(cfg, calibration, program_seconds=1.0, executor=IdleWorkers())
+    return budget
+
+
+def test_the_reserve_for_programs_in_flight_follows_how_many_there_are():
+    programs = [0]
+    budget = planned_budget(600, programs)
+    deadlines = {}
+    for count in (0, 1, 2, 4, 6, 8):
+        programs[0] = count
+        deadlines[count] = budget.deadline
+    assert deadlines[0] > deadlines[1] == deadlines[2] > deadlines[4] > deadlines[8]  # two workers: a round per two programs
+    assert deadlines[2] - deadlines[4] == pytest.approx(deadlines[4] - deadlines[6]) == pytest.approx(deadlines[6] - deadlines[8])
+    programs[0] = 2
+    assert budget.deadline_with(6) == deadlines[8]
+    assert budget.deadline == deadlines[2]  # programs that are in leave their time to the others
+
+
+def test_a_batch_starts_only_while_the_run_can_still_drain_it():
+    programs = [0]
+    roomy = planned_budget(600, programs)
+    assert roomy.can_start(4) and not roomy.past_deadline()
+    # 10 s of final scores per program and worker: 4 programs (2 rounds) do not fit in a 60 s run, 1 does.
+    tight = planned_budget(60, programs, calibration=10.0)
+    assert not tight.can_start(4) and tight.can_start(1)
+    programs[0] = 2  # two in flight: one more would need a second round
+    assert not tight.can_start(1) and not tight.past_deadline()

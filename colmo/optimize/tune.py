@@ -200,8 +200,10 @@ def calibrated(executor: Executor, evaluator: Evaluator, starter: ParametricProg
     `TIMEOUT_FACTOR` times what the starter program's evaluation took in each mode, at least
     `TIMEOUT_FLOOR_S`; so a program that hangs costs seconds, not minutes. The starter must run:
     `ConfigError` if it fails (the spec is the user's)."""
-    evaluate = CandidateEvaluator(executor, evaluator, starter.skeleton)
-    fast, referee = evaluate.fast([starter.values])[0], evaluate.referee(starter.values)
+    # Both at once: with two workers or more the calibration takes one evaluation's time, not two.
+    fast, referee = executor.evaluate([
+        evaluator.request(starter.skeleton, starter.values, mode=FAST), evaluator.request(starter.skeleton, starter.values, mode=REFEREE),
+    ])
     failure = fast.failure or referee.failure
     if failure:
         raise ConfigError(f"the starter policy in {evaluator.spec} fails: {failure}")
