@@ -11,11 +11,13 @@ generated (its generation abandoned otherwise) while the run can still drain it
 (`can_start`): near the end the queue empties instead of the whole run stopping a full queue's
 drain early (a 60 s quadruped run used to reserve so much that it searched nothing).
 
-The calibration is a few seconds of a machine whose load changes: while the search runs, the
-workers' recent seconds per evaluation against the calibration's (`load_factor`, at least 1)
-scale what the programs in flight and the finish will cost, and the deadline moves with them
-(a run on 2 cores shared with other jobs measured evaluations 2-4 times slower than its
-calibration a minute earlier).
+What the drain and the finish cost is measured on the programs themselves: each program's
+final scores (`observe`: the worker seconds of its rounded constants' fast-path and referee
+evaluations, and the referee's seconds per episode), the median of the last few, the starter's
+first. Until then the starter's calibration stands in, scaled by how much slower the workers'
+recent evaluations run than the calibration's (`load_factor`, at least 1): a calibration is a
+few seconds of a machine whose load changes (2 cores shared with other jobs measured evaluations
+2-4 times slower than their calibration a minute earlier), and it pays the workers' cold start.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import statistics
 import threading
 import time
 from collections import deque
@@ -32,6 +35,7 @@ from typing import Callable, Optional
 from colmo.config import SearchConfig
 from colmo.evaluation import Executor
 from colmo.finish import FINISH_SHARE, SAFETY, FinishPlan, plan_finish
+from colmo.optimize.tune import ProgramResult
 from colmo.progress import duration
 
 log = logging.getLogger("colmo.search")
@@ -42,6 +46,7 @@ _CLOSE_S = 1.5
 _STARTER_SHARE = 1 / 3  # of the time limit, at most, for the starter's tuning before the search
 _LOAD_EVERY_S = 1.0  # how often the deadline follows the workers' speed
 _LOAD_WINDOW = 8  # evaluations per worker over which their recent speed is measured
+_OBSERVED = 8  # programs whose final scores say what the next ones' will cost
 
 
 class TimeBudget:
@@ -50,9 +55,14 @@ class TimeBudget:
     calibration tells what the finish costs (`plan`), a third of the time at most; then early
     enough for the finish and the drain of the `programs_in_flight()` at the workers' current speed."""
 
-    def __init__(self, max_seconds: float, programs_in_flight: Callable[[], int] = lambda: 0, elapsed: Optional[float] = None):
-        """`elapsed`: seconds of the limit already spent (default: since the process started)."""
+    def __init__(
+        self, max_seconds: float, programs_in_flight: Callable[[], int] = lambda: 0, elapsed: Optional[float] = None, tuned: bool = True,
+    ):
+        """`elapsed`: seconds of the limit already spent (default: since the process started);
+        `tuned`: whether programs are tuned (their final scores are then a fast-path and a
+        referee evaluation, not the referee's alone)."""
         self.max_seconds = max_seconds
+        self.tuned = tuned
         self.programs_in_flight = programs_in_flight  # programs being tuned now (the search's program threads)
         self.start = time.perf_counter()
         self.end = self.start - (process_seconds() if elapsed is None else elapsed) + max_seconds if max_seconds else math.inf
@@ -66,8 +76,9 @@ class TimeBudget:
         self._recent: deque[tuple[int, float]] = deque()  # (evaluations, busy seconds) of the executor
         self._followed = 0.0  # when the deadline last followed the workers' speed
         self._cfg: Optional[SearchConfig] = None
-        self._drain_per_round = 0.0  # seconds, at the calibration's speed, for each program per worker in flight at the deadline
-        self._drain_fixed = 0.0  # and for the candidates being evaluated then
+        self._calibration = 0.0  # worker seconds of the starter's fast and referee evaluations
+        self._scoring: deque[float] = deque(maxlen=_OBSERVED)  # recent programs' final scores, worker seconds
+        self._referee_episode: deque[float] = deque(maxlen=_OBSERVED)  # and their referee's seconds per episode
         self._finish_seconds = 0.0  # the finish's plan at the workers' current speed
         self._available = 0.0  # for the finish, at the calibration's speed
 
@@ -79,7 +90,28 @@ class TimeBudget:
     @property
     def finish_episode_seconds(self) -> float:
         """One referee episode at the workers' current speed: what `colmo.finish` plans with."""
+        if self._referee_episode:
+            return statistics.median(self._referee_episode)
         return self.episode_seconds * self.load_factor
+
+    def _scoring_seconds(self) -> float:
+        """Worker seconds a program costs once its tuning stops: its final scores."""
+        if self._scoring:
+            return statistics.median(self._scoring)
+        return self._calibration * self.load_factor
+
+    def observe(self, result: ProgramResult) -> None:
+        """A program's final scores, as the workers measured them now: what the next programs'
+        and the finish's will cost. Thread-safe."""
+        if result.failure or not result.evaluation.returns or result.scoring_seconds <= 0:
+            return
+        if self.tuned and result.evaluations == 1:  # nothing to tune (the starter's zeros): the referee's score alone
+            return
+        with self._lock:
+            self._scoring.append(result.scoring_seconds)
+            self._referee_episode.append(result.evaluation.seconds / len(result.evaluation.returns))
+            if self._executor is not None:
+                self._plan_finish()
 
     @property
     def deadline(self) -> float:
@@ -94,8 +126,10 @@ class TimeBudget:
         programs = self.programs_in_flight() + more_programs
         if not programs:
             return self.end - self._finish_seconds
-        rounds = math.ceil(programs / self._executor.n_workers)  # programs per worker, the last round partly idle
-        return self.end - self._finish_seconds - self.load_factor * (self._drain_fixed + self._drain_per_round * rounds)
+        # Each worker ends its candidate (about half a program's final scores: one fast-path
+        # evaluation, often raced short), then scores its programs' final constants one after another.
+        rounds = math.ceil(programs / self._executor.n_workers)
+        return self.end - self._finish_seconds - SAFETY * self._scoring_seconds() * (0.5 + rounds)
 
     def past_deadline(self) -> bool:
         """Whether the programs in flight must stop (at their next candidate); thread-safe."""
@@ -130,11 +164,7 @@ class TimeBudget:
         plan = plan_finish(cfg, self.episode_seconds, workers)
         limit = "max_samples"
         if self.max_seconds:
-            # Past the deadline each program in flight scores its rounded constants on the fast path
-            # and by the referee (the calibration's two evaluations), a worker's programs one after
-            # another; the candidates being evaluated end first (a fast evaluation, often raced short).
-            self._drain_per_round = SAFETY * calibration
-            self._drain_fixed = SAFETY * calibration / 2
+            self._calibration = calibration  # the starter's two evaluations, as a program's final scores are
             self._cfg, self._executor, self._available = cfg, executor, FINISH_SHARE * max(self.end - time.perf_counter(), 0.0)
             self._recent.append((executor.evaluations_done, executor.busy_seconds))
             plan = self._plan_finish()

@@ -42,7 +42,9 @@ log = logging.getLogger("colmo.search")
 
 SAFETY = 1.5  # a loaded machine runs the finish this much slower than the calibration measured
 FINISH_SHARE = 0.4  # of a time limit, at most, for the finish when the full work does not fit
-_RENDER_FIXED_S = 10.0  # matplotlib's import, the plot, ffmpeg's start: 8 s measured on 2 loaded cores
+# The plot and ffmpeg's start (matplotlib's import and the GL probe are warmed up in a thread
+# during the held-out scores): the whole render step, video included, took 4-5 s on 2 loaded cores.
+_RENDER_FIXED_S = 5.0
 _VIDEO_S = 20.0  # seconds of frames for a full-size video at its full frame rate, at most
 _VIDEO_MIN_S = 2.0  # seconds of frames for a small video at a low frame rate
 _SMALL = (320, 240)
@@ -100,14 +102,22 @@ def plan_finish(cfg: SearchConfig, episode_seconds: float, workers: int, availab
     available -= robustness
     # The render first gets what it cannot do without (the episode, the plot, a few frames).
     render = max(episode + _RENDER_FIXED_S + _VIDEO_MIN_S, available / (1 + cfg.evaluation.simplify + cfg.evaluation.render)) if cfg.evaluation.render else 0.0
-    share = max(available - render, 0.0) / (1 + cfg.evaluation.simplify)
-    rounds = max(1, int(share // episode))  # one episode per worker at a time
+    left = max(available - render, 0.0)
+    # Simplifying measures the best program on the training and the held-out episodes, then scores
+    # its candidates the same way: at least three such measurements, or it cannot start. So the
+    # held-out episodes are as many as leave it that; further programs' held-out scores and a
+    # longer simplification share what remains.
+    measurements = 3 if cfg.evaluation.simplify else 0
+    training = heldout_cost(1, cfg.task.episodes)
+    rounds = max(1, int(max(left - measurements * training, 0.0) / (1 + measurements) // episode))  # one episode per worker at a time
     per_program = min(math.ceil(episodes / workers), rounds)
-    kept = min(top, max(1, rounds // per_program))
+    one = per_program * episode  # a program's held-out score
+    spare = left - one - measurements * (one + training)
+    kept = min(top, 1 + max(int(spare / (1 + cfg.evaluation.simplify) // one), 0))
     video = max(render - episode - _RENDER_FIXED_S, _VIDEO_MIN_S)
     return FinishPlan(
-        kept, min(episodes, per_program * workers), heldout_cost(kept, per_program * workers),
-        share if cfg.evaluation.simplify else 0.0, render, video, (640, 480) if video >= _VIDEO_S else _SMALL, True, robustness,
+        kept, min(episodes, per_program * workers), kept * one,
+        max(left - kept * one, 0.0) if cfg.evaluation.simplify else 0.0, render, video, (640, 480) if video >= _VIDEO_S else _SMALL, True, robustness,
     )
 
 
@@ -141,6 +151,7 @@ def finish(
     rendered, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`."""
     best = BestPrograms()
     warming = _warm_up_render() if cfg.evaluation.render else None
+    started, took = time.monotonic(), {}  # seconds each step took, for the closing log line
     plan = plan_finish(cfg, episode_seconds, executor.n_workers, max(_left(until), 0.0))
     if plan.reduced:
         log.warning("finishing in %.0f s: %s", max(_left(until), 0.0), plan.describe(cfg))
@@ -168,12 +179,15 @@ def finish(
         log.info("sample %d: training score %.2f, held-out %s over %d episodes", record.sample, record.score, _shown(score), len(heldout.seeds))
     if not top:
         return best
+    took["held-out"] = time.monotonic() - started
     if cfg.evaluation.robustness:
         # Its time comes out of the simplification's slot, which takes what is left.
         if not best.heldout or not plan.robustness_seconds or _left(until) - plan.render_seconds < plan.robustness_seconds:
             log.warning("no time left for the robustness report of the best policy (search.max_seconds)")
         else:
+            step = time.monotonic()
             best.robustness = _robustness(cfg, executor, evaluator, top[0], run_dir)
+            took["robustness"] = time.monotonic() - step
     if cfg.evaluation.simplify:
         simplify_until = until - plan.render_seconds
         # Simplifying first measures the best program on the training and the held-out episodes.
@@ -181,10 +195,18 @@ def finish(
             log.warning("no time left to simplify the best policy (search.max_seconds)")
         else:
             # What is being scored when it stops still ends: about two such measurements.
+            step = time.monotonic()
             best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until - 2 * best_took, plan.reduced)
+            took["simplification"] = time.monotonic() - step
     if cfg.evaluation.render:
+        step = time.monotonic()
         warming.join(max(_left(until), 0.0))
         best.media = _render(cfg, executor, heldout, top[0], run_dir, until, plan)
+        took["video and plot"] = time.monotonic() - step
+    log.info(
+        "finish took %.0f s of the %.0f s planned: %s", time.monotonic() - started, plan.seconds,
+        ", ".join(f"{name} {seconds:.0f} s" for name, seconds in took.items()),
+    )
     return best
 
 

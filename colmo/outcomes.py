@@ -28,10 +28,14 @@ from colmo.store import ProgramStore
 class SampleOutcomes:
     """The outcomes of one search's samples, evaluated on `executor` with `evaluator` (set once
     the starter's calibration made it) by `threads` program threads; a tuning stops at its next
-    candidate once `must_stop()`."""
+    candidate once `must_stop()`; `observe` sees each program's result."""
 
-    def __init__(self, cfg: SearchConfig, store: ProgramStore, executor: Executor, threads: int, must_stop: Callable[[], bool]):
+    def __init__(
+        self, cfg: SearchConfig, store: ProgramStore, executor: Executor, threads: int, must_stop: Callable[[], bool],
+        observe: Callable[[ProgramResult], None] = lambda result: None,
+    ):
         self.cfg = cfg
+        self.observe = observe  # told every program's result (what its final scores cost: `colmo.budget`)
         self.store = store
         self.executor = executor
         self.evaluator: Optional[Evaluator] = None
@@ -44,7 +48,9 @@ class SampleOutcomes:
         """Tune and score `program`, with a seed of its own from the run's seed and `sample`."""
         seed = int(np.random.SeedSequence([self.cfg.seed, sample + 1]).generate_state(1)[0])
         evaluate = CandidateEvaluator(self.executor, self.evaluator, program.skeleton)
-        return optimize_program(program, evaluate, self.cfg.gfo, seed, stop=self.must_stop)
+        result = optimize_program(program, evaluate, self.cfg.gfo, seed, stop=self.must_stop)
+        self.observe(result)
+        return result
 
     def submit(self, sample: Sample, program: Reading, database: ProgramDatabase) -> concurrent.futures.Future:
         """Start the evaluation of the sample's program (as `colmo.answers` read it) unless

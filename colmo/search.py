@@ -110,8 +110,11 @@ class Search:
         self.stop_reason = ""
         self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=cfg.gfo.tunes_constants)
         self.stopping = threading.Event()  # programs in flight stop tuning at their next candidate
-        self.outcomes = SampleOutcomes(cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop)
-        self.budget = TimeBudget(cfg.search.max_seconds, self.outcomes.running)
+        self.outcomes = SampleOutcomes(
+            cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop,
+            observe=lambda result: self.budget.observe(result),
+        )
+        self.budget = TimeBudget(cfg.search.max_seconds, self.outcomes.running, tuned=cfg.gfo.tunes_constants)
         self.generation_thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
         self.evaluator: Optional[Evaluator] = None
         self.database: Optional[ProgramDatabase] = None
@@ -330,9 +333,10 @@ class Search:
         return self.stopping.is_set() or self.budget.past_deadline()
 
     def _stop_requested(self) -> bool:
-        if self.budget.past_deadline():
+        if self.budget.past_deadline() and not self.stopping.is_set():
             self.stop_reason = self.stop_reason or "max_seconds"
             self.stopping.set()
+            log.info("search deadline: %d programs in flight stop tuning and score their best constants", self.outcomes.running())
         return bool(self.stop_reason)
 
     def _batch_size(self) -> int:

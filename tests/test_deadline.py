@@ -9,6 +9,7 @@ from __future__ import annotations
 import ast
 import contextlib
 import json
+import math
 import re
 import sqlite3
 import time
@@ -19,6 +20,7 @@ import pytest
 from conftest import compose, run_colmo
 
 from colmo.budget import TimeBudget
+from colmo.finish import SAFETY, plan_finish
 from colmo.render import PLOT_FILE, VIDEO_FILE
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, STORE_FILE, SUMMARY_FILE
 
@@ -125,3 +127,18 @@ def test_a_batch_starts_only_while_the_run_can_still_drain_it():
     assert not tight.can_start(4) and tight.can_start(1)
     programs[0] = 2  # two in flight: one more would need a second round
     assert not tight.can_start(1) and not tight.past_deadline()
+
+
+@pytest.mark.parametrize("available", [12.0, 15.0, 22.0, 40.0])
+def test_a_finish_cut_to_fit_still_leaves_the_simplification_room_to_start(available):
+    cfg = compose("search", "task=pendulum")
+    episode_seconds, workers = 0.05, 2
+    assert not plan_finish(cfg, episode_seconds, workers).reduced  # about a minute, as configured
+    plan = plan_finish(cfg, episode_seconds, workers, available)
+    assert plan.reduced and plan.seconds <= available + 1e-9 and plan.top >= 1
+    # What finish() requires before it simplifies: two measurements of the best program (its
+    # training and held-out episodes), and a round of candidates after them.
+    episode = SAFETY * episode_seconds
+    best_measured = math.ceil(plan.heldout_episodes / workers) * episode + math.ceil(cfg.task.episodes / workers) * episode
+    assert plan.simplify_seconds >= 3 * best_measured - 1e-9
+    assert plan.render_seconds >= episode + 2.0  # the episode it films and a few frames

@@ -145,6 +145,9 @@ class ProgramResult:
     cut_short: bool
     seconds: float
     size: ProgramSize
+    # Worker seconds of scoring the final constants (the rounded ones on the fast path, then the
+    # referee): what a program still costs once its tuning stops (`colmo.budget`).
+    scoring_seconds: float = 0.0
 
     @property
     def score(self) -> float:
@@ -163,25 +166,29 @@ def optimize_program(
     if not cfg.tunes_constants or not program.values:  # nothing to tune: the referee's score is the only one
         final = evaluate.referee(program.values)
         code = instantiate(program.skeleton, program.values)
-        return ProgramResult(tuple(program.values), code, final, final, 1, final.steps, 0, False, time.perf_counter() - start, measure(code))
+        return ProgramResult(
+            tuple(program.values), code, final, final, 1, final.steps, 0, False, time.perf_counter() - start, measure(code), final.seconds,
+        )
     tuning = tune(evaluate, program.values, cfg, seed, stop)
     params, fast, evaluations, steps = tuple(program.values), tuning.initial, tuning.evaluations, tuning.steps
-    digits = None
+    digits, scoring_seconds = None, 0.0
     if tuning.params != params:  # cut short or not: the code a person reads has 4-digit constants
         rounded = round_significant(tuning.params)
         evaluation = evaluate.fast([rounded])[0]
-        evaluations, steps = evaluations + 1, steps + evaluation.steps
+        evaluations, steps, scoring_seconds = evaluations + 1, steps + evaluation.steps, evaluation.seconds
         if evaluation.score >= tuning.initial.score:  # else rounding cost more than tuning gained
             params, fast, digits = rounded, evaluation, DISPLAY_DIGITS
     final = fast
     if not fast.failure:
-        final = _refereed(evaluate.referee(params), fast)
-        evaluations, steps = evaluations + 1, steps + final.steps
+        refereed = evaluate.referee(params)
+        final = _refereed(refereed, fast)
+        evaluations, steps, scoring_seconds = evaluations + 1, steps + final.steps, scoring_seconds + refereed.seconds
     code = instantiate(program.skeleton, params, digits=digits)
     # A program failed as tampering forged its fast-path returns: none of them is its score.
     initial = Evaluation(failure=final.failure) if final.failure and final.failure.startswith(TAMPERING) else tuning.initial
     return ProgramResult(
-        params, code, final, initial, evaluations, steps, tuning.raced_out, tuning.cut_short, time.perf_counter() - start, measure(code)
+        params, code, final, initial, evaluations, steps, tuning.raced_out, tuning.cut_short, time.perf_counter() - start, measure(code),
+        scoring_seconds,
     )
 
 
