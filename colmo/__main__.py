@@ -10,13 +10,15 @@ from hydra.core.hydra_config import HydraConfig
 
 from colmo.cli import hydra_app
 from colmo.config import SearchConfig
-from colmo.specs import load_task_spec
-from colmo.store import open_for_resume, run_settings
 from colmo.trackers import make_tracker
 
 
 def check_inputs(cfg: SearchConfig) -> None:
-    """The spec file loads, and `resume=` names a run made with the same scoring settings."""
+    """The spec file loads, and `resume=` names a run made with the same scoring settings.
+    (Imports here, not above: shell completion imports this module on every Tab.)"""
+    from colmo.specs import load_task_spec
+    from colmo.store import open_for_resume, run_settings
+
     load_task_spec(cfg.task.spec)
     if cfg.resume:
         open_for_resume(Path(cfg.resume).expanduser(), run_settings(cfg))

@@ -142,6 +142,10 @@ class TimeBudget:
         self._follow()
         return time.perf_counter() < self.deadline_with(programs)
 
+    def programs_that_fit(self, most: int) -> int:
+        """How many more programs, up to `most`, could be tuned and drained before the finish."""
+        return next((programs for programs in range(most, 0, -1) if self.can_start(programs)), 0)
+
     def _follow(self) -> None:
         now = time.perf_counter()
         if self._executor is not None and now - self._followed >= _LOAD_EVERY_S:

@@ -26,17 +26,20 @@ import logging
 import math
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional, Sequence
 
 from colmo.config import SearchConfig
 from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor
 from colmo.heldout import heldout_evaluator, heldout_score, robustness_of
-from colmo.record import EVALUATED, SampleRecord
+from colmo.record import EVALUATED, SampleRecord, Summary, Totals
 from colmo.robustness import grid_points, save
 from colmo.store import SIMPLIFIED_POLICY_FILE, ProgramStore
+
+if TYPE_CHECKING:
+    from colmo.database import StoredProgram
 
 log = logging.getLogger("colmo.search")
 
@@ -130,6 +133,18 @@ class BestPrograms:
     media: dict = field(default_factory=dict)
     simplified: dict = field(default_factory=dict)
     robustness: dict = field(default_factory=dict)
+
+    def summary(
+        self, task: str, best: Optional["StoredProgram"], best_so_far: Sequence[tuple[int, float]], stop_reason: str, run_dir: Path, totals: Totals,
+    ) -> Summary:
+        """A search's summary: its `best` program (None if it has none), with its held-out score
+        where it got one, and these results."""
+        best_heldout = next((h["heldout_score"] for h in self.heldout if best and h["key"] == best.key), None)
+        return Summary(
+            task=task, best_score=best.score if best else None, best_heldout_score=best_heldout, best_key=best.key if best else None,
+            best_code=best.code if best else None, best_so_far=tuple(best_so_far), stop_reason=stop_reason, run_dir=str(run_dir),
+            heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, robustness=self.robustness, **asdict(totals),
+        )
 
 
 def top_records(store: ProgramStore, count: int) -> list[SampleRecord]:

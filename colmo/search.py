@@ -130,9 +130,7 @@ class Search:
             try:
                 if not self._wants_probe():  # a generator that cannot start ends the run before any work
                     self._start_generator()
-                # The starter's fast and referee evaluations, side by side on the workers: their
-                # worker seconds (not the wall time) are what the budget's estimates scale.
-                busy = self.executor.busy_seconds
+                busy = self.executor.busy_seconds  # the calibration's worker seconds, not its wall time, scale the budget
                 self.evaluator = self.outcomes.evaluator = training_evaluator(self.spec, self.cfg.task, self.cfg.executor, self.executor, self.cfg.seed)
                 calibration = self.executor.busy_seconds - busy
                 self.database = ProgramDatabase(self.cfg.database, self._starter(), self.cfg.seed)
@@ -154,7 +152,8 @@ class Search:
                     self.cfg, self.store, self.executor, self.evaluator, self.run_dir,
                     until=self.budget.finish_by(), episode_seconds=self.budget.finish_episode_seconds,
                 )
-            summary = self._summary(best)
+            best_program = self.database.best if self.database else None
+            summary = best.summary(self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals())
             write_outputs(summary, self.run_dir)
             for observer in self.observers:
                 observer.on_finish(summary)
@@ -168,10 +167,7 @@ class Search:
             in_flight.append(self._reevaluate(resumed))
         while True:
             while not self._stop_requested() and len(in_flight) < self.cfg.search.queue_size and self._samples_left() > 0:
-                size = self._batch_size()
-                if not size:
-                    break
-                batch = self._generate(size)
+                batch = self._generate()
                 if batch is None:
                     break
                 in_flight.append(batch)
@@ -241,8 +237,11 @@ class Search:
         prompt = build_prompt(spec.description, self.database.select(), constants_tuned=tuned, allowed_imports=spec.allowed_imports)
         return dataclasses.replace(prompt, retry=retry)
 
-    def _generate(self, n: int) -> Optional[_Batch]:
-        """Generate the next batch of `n` samples and start evaluating it; None if the search is stopping."""
+    def _generate(self) -> Optional[_Batch]:
+        """Generate the next batch and start evaluating it; None if the search is stopping."""
+        n = self._batch_size()
+        if not n:
+            return None
         prompt = self._prompt()
         started = time.perf_counter()
         generations = self._generated(prompt, n)
@@ -273,7 +272,8 @@ class Search:
         """The generator's answers to `prompt`; None if the search is stopping or the generator failed."""
         generating = self.generation_thread.submit(self.generator.generate, prompt, n)
         while not generating.done():
-            if self._stop_requested() or not self._fits(n):
+            if self._stop_requested() or not self.budget.can_start(n):
+                self.stop_reason = self.stop_reason or "max_seconds"  # the time left can no longer take this batch
                 generating.cancel()
                 self.generator.cancel()
                 return None
@@ -328,8 +328,7 @@ class Search:
     # -- stopping ---------------------------------------------------------------------------------
 
     def _tuning_must_stop(self) -> bool:
-        """Programs in flight stop tuning at their next candidate past the deadline, or once the
-        search is interrupted (a generator that fails lets them finish)."""
+        """Past the deadline or once interrupted (not when the generator fails), at the next candidate."""
         return self.stopping.is_set() or self.budget.past_deadline()
 
     def _stop_requested(self) -> bool:
@@ -340,22 +339,12 @@ class Search:
         return bool(self.stop_reason)
 
     def _batch_size(self) -> int:
-        """The next batch's size: `llm.batch_size`, fewer if the samples left or the time left
-        (programs that could still be tuned and drained before the finish) allow fewer; 0 ends
-        the generation (the search stops once the programs in flight are in)."""
-        size = min(self.cfg.llm.batch_size, self._samples_left())
-        while size and not self._fits(size, stop=size == 1):
-            size -= 1
-        return size
-
-    def _fits(self, programs: int, stop: bool = True) -> bool:
-        """Whether `programs` more programs could be tuned and drained before the finish;
-        `stop`: if not, the search generates no more."""
-        if self.budget.can_start(programs):
-            return True
-        if stop:
+        """`llm.batch_size`, or fewer if fewer samples are left or the time left can tune and drain
+        fewer programs; 0 ends the generation (the search stops once the programs in flight are in)."""
+        size = self.budget.programs_that_fit(min(self.cfg.llm.batch_size, self._samples_left()))
+        if not size:
             self.stop_reason = self.stop_reason or "max_seconds"
-        return False
+        return size
 
     def _check_limits(self) -> None:
         limit = self.cfg.search.stop_at_score
@@ -401,15 +390,3 @@ class Search:
             generation_seconds=batch.generation_seconds, evaluation_seconds=time.perf_counter() - batch.started,
             queue_depth=self.next_batch - batch.index - 1, **dataclasses.asdict(self.totals()),
         )
-
-    def _summary(self, programs: BestPrograms) -> Summary:
-        best = self.database.best if self.database else None
-        best_heldout = next((h["heldout_score"] for h in programs.heldout if best and h["key"] == best.key), None)
-        return Summary(
-            task=self.cfg.task.name, best_score=best.score if best else None, best_heldout_score=best_heldout,
-            best_key=best.key if best else None, best_code=best.code if best else None,
-            best_so_far=tuple(self.best_so_far), stop_reason=self.stop_reason, run_dir=str(self.run_dir),
-            heldout=tuple(programs.heldout), media=programs.media, simplified=programs.simplified, robustness=programs.robustness,
-            **dataclasses.asdict(self.totals()),
-        )
-

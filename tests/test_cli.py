@@ -5,6 +5,7 @@ runtime failure, no traceback unless `hydra.verbose=true`) whatever Hydra flag i
 import socket
 import subprocess
 import sys
+from importlib import resources
 from pathlib import Path
 
 import pytest
@@ -74,16 +75,37 @@ def test_help_with_a_bad_override_is_one_line(tmp_path):
     assert "Could not find 'task/nope'" in line
 
 
+def completions(line: str, cwd: Path, shell: str = "bash") -> list[str]:
+    """What a Tab after `line` offers: the shell runs `colmo -sc query=<shell>` with the line in COMP_LINE."""
+    query = subprocess.run(
+        [str(BIN / "colmo"), "-sc", f"query={shell}"], cwd=cwd, capture_output=True, text=True, timeout=120,
+        env={"PATH": str(BIN), "COMP_LINE": line, "COMP_POINT": str(len(line))},
+    )
+    assert query.returncode == 0 and not query.stderr, query.stderr
+    return query.stdout.split()
+
+
 def test_shell_completion_installs_and_completes(tmp_path):
     result = script("colmo", "-sc", "install=bash", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert "hydra_bash_completion" in result.stdout and "complete -o nospace -o default -F hydra_bash_completion colmo" in result.stdout
-    query = subprocess.run(
-        [str(BIN / "colmo"), "-sc", "query=bash"], cwd=tmp_path, capture_output=True, text=True, timeout=120,
-        env={"PATH": str(BIN), "COMP_LINE": "colmo gfo=o", "COMP_POINT": "11"},
-    )
-    assert query.returncode == 0 and "gfo=oneplusone" in query.stdout.split(), query.stderr
+    assert "gfo=oneplusone" in completions("colmo gfo=o", tmp_path)
+    assert "gfo.budget=" in completions("colmo gfo.", tmp_path)  # keys of the composed config
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("shell", ["bash", "fish"])
+def test_shell_completion_offers_each_groups_options_and_no_schema_entry(tmp_path, shell):
+    conf = resources.files("colmo.conf")
+    for group in ("task", "gfo", "llm", "executor", "database", "tracker"):
+        options = sorted(entry.name.removesuffix(".yaml") for entry in (conf / group).iterdir() if entry.name.endswith(".yaml"))
+        assert completions(f"colmo {group}=", tmp_path, shell) == [f"{group}={option}" for option in options]  # not gfo=schema, gfo=bo_schema
+
+
+def test_shell_completion_of_hydra_groups_offers_the_installed_plugins(tmp_path):
+    pytest.importorskip("hydra_plugins.hydra_joblib_launcher")
+    offered = completions("colmo hydra/launcher=", tmp_path)
+    assert {"hydra/launcher=basic", "hydra/launcher=slurm", "hydra/launcher=joblib"} <= set(offered)
 
 
 def test_cfg_job_prints_the_config_or_one_error_line(tmp_path):
