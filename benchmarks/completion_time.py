@@ -5,10 +5,12 @@ typed so far in `COMP_LINE` (Hydra's bash completion, hydra/_internal/core_plugi
 bash_completion.py). This runs that command for each line, and `python -c pass` beside it, in
 alternating rounds, and prints the median wall and CPU seconds of each and the completions the
 last round offered (machines are noisy and shared: CPU seconds and the ratio to the bare
-interpreter say more than wall seconds under load).
+interpreter say more than wall seconds under load). `--compare DIR` runs each line a second
+time with another colmo source tree first on PYTHONPATH, in the same rounds: before and after.
 
     python benchmarks/completion_time.py                       # the default lines, 5 rounds
     python benchmarks/completion_time.py --rounds 9 --line 'colmo gfo=' --line 'colmo llm.'
+    git worktree add /tmp/colmo-before HEAD~3 && python benchmarks/completion_time.py --compare /tmp/colmo-before
 """
 
 from __future__ import annotations
@@ -40,12 +42,15 @@ def main() -> None:
     parser.add_argument("--line", action="append", help=f"a command line typed so far (default: {', '.join(map(repr, LINES))})")
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--colmo", default=shutil.which("colmo") or "colmo", help="the colmo executable")
+    parser.add_argument("--compare", help="another colmo source tree (its directory holding colmo/), run beside this one")
     args = parser.parse_args()
     lines = args.line or list(LINES)
     commands = {"python -c pass": ([sys.executable, "-c", "pass"], dict(os.environ))}
     for line in lines:
         env = {**os.environ, "COMP_LINE": line, "COMP_POINT": str(len(line))}
         commands[f"Tab after {line!r}"] = ([args.colmo, "-sc", "query=bash"], env)
+        if args.compare:
+            commands[f"  compared: {line!r}"] = ([args.colmo, "-sc", "query=bash"], {**env, "PYTHONPATH": args.compare})
     walls: dict[str, list[float]] = {name: [] for name in commands}
     cpus: dict[str, list[float]] = {name: [] for name in commands}
     offered: dict[str, str] = {}
@@ -59,7 +64,7 @@ def main() -> None:
     print(f"{args.rounds} rounds, load average {os.getloadavg()[0]:.1f}; medians")
     for name in commands:
         wall, cpu = statistics.median(walls[name]), statistics.median(cpus[name])
-        print(f"  {name:<36} wall {wall:5.2f} s ({wall / base:4.1f}x python -c pass)   cpu {cpu:5.2f} s")
+        print(f"  {name:<38} wall {wall:5.2f} s ({wall / base:4.1f}x python -c pass)   cpu {cpu:5.2f} s")
     for name, out in offered.items():
         if name != "python -c pass":
             print(f"  {name}: {' '.join(out.split())}")
