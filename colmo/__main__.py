@@ -9,12 +9,14 @@ from typing import Optional
 from hydra.core.hydra_config import HydraConfig
 
 from colmo.cli import hydra_app
-from colmo.config import SearchConfig
+from colmo.config import OpenAIConfig, SearchConfig
+from colmo.errors import RunError
 from colmo.trackers import make_tracker
 
 
 def check_inputs(cfg: SearchConfig) -> None:
-    """The spec file loads, and `resume=` names a run made with the same scoring settings.
+    """The spec file loads, `resume=` names a run made with the same scoring settings, and with
+    `llm=openai` a server answers: all before any output directory, MLflow run or sandbox exists.
     (Imports here, not above: shell completion imports this module on every Tab.)"""
     from colmo.specs import load_task_spec
     from colmo.store import open_for_resume, run_settings
@@ -22,6 +24,19 @@ def check_inputs(cfg: SearchConfig) -> None:
     load_task_spec(cfg.task.spec)
     if cfg.resume:
         open_for_resume(Path(cfg.resume).expanduser(), run_settings(cfg))
+    if isinstance(cfg.llm, OpenAIConfig):
+        check_servers(cfg)
+
+
+def check_servers(cfg: SearchConfig) -> None:
+    """`RunError` unless one of `llm.base_url`'s servers answers: the generator is started (it
+    asks each server for its models) and closed again; the search starts its own."""
+    from colmo.generate import GeneratorError, make_generator
+
+    try:
+        make_generator(cfg.llm, cfg.seed).close()
+    except GeneratorError as error:
+        raise RunError(f"llm={cfg.llm.name}: {error}") from None
 
 
 @hydra_app("search", check=check_inputs)

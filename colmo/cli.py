@@ -6,8 +6,9 @@ of a sweep is composed and validated (every value of a choice or range sweep, bo
 sweeper's interval; `check` vets the files it names), so anything a user can get wrong ends in
 one line on stderr (`colmo: error: ...`) and exit code 2 whatever Hydra flag is used
 (`--cfg job task=nope` too), and leaves no output directory. A `ConfigError` or `RunError`
-during the run ends in one line and exit code 2 or 1. `hydra.verbose=true` shows the traceback
-instead. Shell completion (`-sc install=bash`, `-sc query=bash`) is Hydra's, without the schema entries and, on
+during the run ends in one line and exit code 2 or 1 (a `RunError` from `check`, such as no
+language-model server answering, too). `hydra.verbose=true` shows the traceback instead. Shell
+completion (`-sc install=bash`, `-sc query=bash`) is Hydra's, without the schema entries and, on
 each Tab, without importing the plugins it does not need (`_shell_completion`).
 `--help` is colmo's own: every config group with its options, each described by the comment
 heading its YAML file (schema entries hidden, the chosen ones marked), then every documented
@@ -201,8 +202,8 @@ def hydra_app(
                         cfg = compose(config_name, variant, output_dir=None if args.cfg or args.info else args.multirun)
                         if check is not None and not (args.cfg or args.info):
                             check(cfg)
-                except Exception as error:  # every composition error is the user's: one line
-                    _fail(error, verbose=_verbose(overrides), code=EXIT_USAGE)
+                except Exception as error:  # one line: a composition error is the user's (exit 2), a RunError not (1)
+                    _fail(error, verbose=_verbose(overrides))
             try:
                 if args.shell_completion:
                     _shell_completion(hydra_main, list(args.overrides))

@@ -148,12 +148,16 @@ def test_a_policy_file_that_is_a_directory_is_one_line(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
-def test_an_openai_server_that_does_not_answer_is_one_line_exit_1(tmp_path):
+def test_an_openai_server_that_does_not_answer_is_one_line_exit_1_before_anything_exists(tmp_path):
     with socket.socket() as probe:  # a port nothing listens on: the connection is refused at once
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    result = script("colmo", "llm=openai", f"llm.base_url=http://127.0.0.1:{port}/v1", "tracker=none", *TINY, cwd=tmp_path)
+    result = script("colmo", "llm=openai", f"llm.base_url=http://127.0.0.1:{port}/v1", *TINY, cwd=tmp_path)  # the default tracker, mlflow
     line = one_error_line(result, 1)
-    assert f"no OpenAI-compatible server answers at http://127.0.0.1:{port}/v1" in line
+    assert line.startswith(f"colmo: error: llm=openai: no OpenAI-compatible server answers at http://127.0.0.1:{port}/v1"), line
     assert "start one" in line and "llm.base_url" in line
-    assert "best policy" not in result.stdout and "def policy" not in result.stdout  # no search ran
+    assert result.stderr == line + "\n" and not result.stdout  # nothing ran: no sandbox, no search, no MLflow run
+    assert not list(tmp_path.iterdir())  # no output directory, no MLflow store
+    sweep = script("colmo", "-m", "llm=openai", f"llm.base_url=http://127.0.0.1:{port}/v1", "seed=0,1", *TINY, cwd=tmp_path)
+    assert "no OpenAI-compatible server answers" in one_error_line(sweep, 1)
+    assert not list(tmp_path.iterdir())
