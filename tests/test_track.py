@@ -30,17 +30,24 @@ from colmo.track import (
     VIEW_TAG,
     MlflowTracker,
     TrackedRun,
+    browse_hint,
     flatten,
     open_experiment,
     retry_locked,
 )
 
+# Small, with the whole finish (simplification, video and plot) that a run logs at its end.
 TINY = (
     "search.max_samples=4", "llm.batch_size=2", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2",
-    "evaluation.render=false", "evaluation.simplify=false", "executor.workers=1", "search.progress=false",
+    "executor.workers=1", "search.progress=false",
 )
 # The run list's columns a person compares runs by.
 KEY_METRICS = ("best_score", "best_heldout_score", "samples", "programs_evaluated", "valid_program_rate", "evaluations_per_second", "steps", "seconds")
+
+
+def shown_digits(value: float) -> bool:
+    """A metric as MLflow's run list shows it: at most 4 significant digits, or an integer."""
+    return value == int(value) or float(f"{value:.4g}") == value
 
 
 def _rounded(value):
@@ -87,8 +94,13 @@ def sweep(tmp_path_factory):
 def test_a_sweep_is_one_parent_run_with_a_child_per_job(sweep):
     cwd, client, experiment, runs = sweep
     assert experiment.tags[EXPERIMENT_KIND_TAG] == CLASSIC_ML  # MLflow 3.0-3.4's UI opens it in the classic ML view
-    view = json.loads(experiment.tags[VIEW_TAG])  # the run list's columns in MLflow's UI (ui_path)
-    assert view["orderByKey"] == "metrics.`best_score`" and {f"metrics.`{m}`" for m in KEY_METRICS} <= set(view["selectedColumns"])
+    view = json.loads(experiment.tags[VIEW_TAG])  # the run list's columns in MLflow's UI (browse_hint)
+    assert {f"metrics.`{m}`" for m in (*KEY_METRICS, "runs")} <= set(view["selectedColumns"])
+    # Newest first: the order under which MLflow's UI nests each job under its sweep's parent run
+    # (sorted by a metric, it lists them flat).
+    assert (view["orderByKey"], view["orderByAsc"]) == ("attributes.start_time", False)
+    assert experiment.tags["mlflow.experiment.primaryMetric.name"] == "best_score"  # the chart view opens on it
+    assert experiment.tags["mlflow.experiment.primaryMetric.greaterIsBetter"] == "True"
     parents = [run for run in runs if "mlflow.parentRunId" not in run.data.tags]
     children = [run for run in runs if "mlflow.parentRunId" in run.data.tags]
     assert len(parents) == 1 and len(children) == 2
@@ -99,6 +111,7 @@ def test_a_sweep_is_one_parent_run_with_a_child_per_job(sweep):
     assert "gfo=none,oneplusone" in parent.data.tags["overrides"].split()
     assert parent.data.metrics["runs"] == 2
     assert parent.data.metrics["best_score"] == max(child.data.metrics["best_score"] for child in children)
+    assert next(iter(parent.data.metrics)) == "best_score"
 
     names = [child.info.run_name for child in children]
     assert len(set(names)) == 2
@@ -126,11 +139,16 @@ def test_sweep_jobs_log_params_tags_metric_columns_programs_and_artifacts(sweep,
         assert f"gfo={tags['gfo']}" in tags["overrides"].split()
         assert tags["colmo.version"] and len(tags.get("mlflow.source.git.commit", "x" * 40)) == 40
 
-        # metrics: the key ones as run-list columns (their latest values) ...
+        # metrics: the key ones as run-list columns (their latest values), best score first (what
+        # MLflow's compare page plots first), rounded as they are shown ...
         metrics = run.data.metrics
         assert set(KEY_METRICS) <= set(metrics), set(KEY_METRICS) - set(metrics)
+        assert next(iter(metrics)) == "best_score"
         for name in ("best_score", "best_heldout_score", "samples", "programs_evaluated", "evaluations", "steps"):
-            assert metrics[name] == pytest.approx(summary[name]), name
+            assert metrics[name] == pytest.approx(summary[name], rel=5e-4), name
+        assert all(shown_digits(value) for value in metrics.values()), metrics
+        for name in ("seconds", "evaluations_per_second", "valid_program_rate"):
+            assert all(shown_digits(m.value) for m in client.get_metric_history(run.info.run_id, name)), name
         # ... and one point per batch, at step = samples so far
         for name in ("best_score", "evaluations", "seconds", "programs_evaluated", "best_score_island_0"):
             assert [m.step for m in client.get_metric_history(run.info.run_id, name)] == [2, 4], name
@@ -148,9 +166,18 @@ def test_sweep_jobs_log_params_tags_metric_columns_programs_and_artifacts(sweep,
             if row["sample"] in heldout and heldout[row["sample"]] is not None:
                 assert row["heldout_score"] == pytest.approx(heldout[row["sample"]])
 
-        # artifacts
-        names = {f.path for f in client.list_artifacts(run.info.run_id)} | {f.path for f in client.list_artifacts(run.info.run_id, "hydra")}
+        # artifacts: every file the run made that the README lists
+        names = {f.path for folder in (None, "hydra", "best_policy") for f in client.list_artifacts(run.info.run_id, folder)}
         assert {"best_policy.py", "summary.json", "best_so_far.png", "programs.json", "programs.html", "hydra/config.yaml", "hydra/overrides.yaml"} <= names
+        assert (run_dir / "simplified_policy.py").is_file() and "simplified_policy.py" in names
+        media = summary["media"]
+        assert {"plot", "video"} <= set(media), media  # the best policy on a held-out episode, made by every job
+        assert {f"best_policy/{Path(media['plot']).name}", f"best_policy/{Path(media['video']).name}"} <= names
+
+        # where to look: the `mlflow ui` command for this store and the address it serves the view at
+        log = (run_dir / "colmo.log").read_text()
+        ui = f"/#/experiments/{experiment.experiment_id}/runs?workflowType=machine_learning&viewStateShareKey=colmo"
+        assert f"browse: mlflow ui --backend-store-uri sqlite:///{cwd / 'mlruns.db'} --port 5000, then http://127.0.0.1:5000{ui}" in log
         assert not any(name.startswith("programs/") for name in names)  # no per-batch files
         best = client.download_artifacts(run.info.run_id, "best_policy.py", str(cwd / run.info.run_id))
         assert Path(best).read_text() == (run_dir / "best_policy.py").read_text()
@@ -213,8 +240,8 @@ def test_mlflow_server_lists_the_runs_nested_over_rest(sweep):
         found = _post(f"{base}/api/2.0/mlflow/runs/search", {"experiment_ids": [experiment["experiment_id"]]})["runs"]
         assert sorted(r["info"]["run_name"] for r in found) == sorted(r.info.run_name for r in runs)
         for run in found:
-            metrics = {m["key"]: m for m in run["data"]["metrics"]}
-            assert run["info"]["status"] == "FINISHED" and "best_score" in metrics
+            assert run["info"]["status"] == "FINISHED"
+            assert run["data"]["metrics"][0]["key"] == "best_score"  # what the compare page plots first
     finally:
         os.killpg(server.pid, signal.SIGTERM)
         try:
@@ -271,11 +298,24 @@ def test_open_experiment_is_safe_when_processes_start_at_the_same_instant(tmp_pa
     assert MlflowClient(uri).get_experiment(results[0]).tags[EXPERIMENT_KIND_TAG] == CLASSIC_ML
 
 
-def test_an_experiment_made_before_gets_the_classic_kind(store):
+def test_an_experiment_made_before_gets_the_classic_kind_and_colmos_view(store):
     uri = store
-    experiment_id = MlflowClient(uri).create_experiment("old")
+    old_view = json.dumps({"selectedColumns": ["metrics.`best_score`"], "orderByKey": "metrics.`best_score`", "orderByAsc": False})
+    experiment_id = MlflowClient(uri).create_experiment(
+        "old", tags={VIEW_TAG: old_view, "mlflow.experiment.primaryMetric.name": "best_heldout_score"},  # an older colmo's view; a person's choice
+    )
     assert open_experiment(uri, "old")[1] == experiment_id
-    assert MlflowClient(uri).get_experiment(experiment_id).tags[EXPERIMENT_KIND_TAG] == CLASSIC_ML
+    tags = MlflowClient(uri).get_experiment(experiment_id).tags
+    assert tags[EXPERIMENT_KIND_TAG] == CLASSIC_ML
+    assert json.loads(tags[VIEW_TAG])["orderByKey"] == "attributes.start_time"
+    assert tags["mlflow.experiment.primaryMetric.name"] == "best_heldout_score"
+
+
+def test_the_ui_address_follows_the_tracking_uri():
+    ui = "/#/experiments/7/runs?workflowType=machine_learning&viewStateShareKey=colmo"
+    assert browse_hint("http://mlflow.lab:8080/", "7") == f"http://mlflow.lab:8080{ui}"
+    assert browse_hint("https://example.org/mlflow", "7") == f"https://example.org/mlflow{ui}"
+    assert browse_hint("postgresql://db/mlflow", "7") == f"mlflow ui --backend-store-uri postgresql://db/mlflow --port 5000, then http://127.0.0.1:5000{ui}"
 
 
 def _record(sample: int, score: float) -> SampleRecord:

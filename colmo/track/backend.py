@@ -10,12 +10,22 @@ created, so runs launched from any directory land in one place. Any other URI
 (`http://host:5000`, `postgresql://...`) is handed to MLflow as is.
 
 Experiments (`tracker.experiment`, else the task name) are tagged as classic ML experiments
-(`mlflow.experimentKind: custom_model_development`, which MLflow 3.0-3.4's UI reads) and carry a
-shared view of the run list (`mlflow.sharedViewState.colmo`): the key metrics and GFO/LLM/seed
-as columns, best score first. MLflow 3.17's UI opens in its GenAI view (traces, judges) whatever
-the tag says, and shows no metric column until one is chosen, so each run logs where to look:
-`<UI address>` + `ui_path(experiment_id)`, which selects the classic view and colmo's columns
-(the UI's "Override saved view" keeps them).
+(`mlflow.experimentKind: custom_model_development`, which MLflow 3.0-3.4's UI reads), with
+`best_score` as their primary metric (greater is better: the metric the run list's chart view
+opens on) and a shared view of the run list (`mlflow.sharedViewState.colmo`): the key metrics
+and GFO/LLM/seed as columns, newest first. The order is the one under which MLflow's UI (3.17)
+nests child runs under their parent; sorted by a metric it lists them flat, so the jobs of a
+sweep sit under their sweep's parent run, whose columns hold their best scores. MLflow 3.17's
+UI opens in its GenAI view (traces, judges) whatever the kind tag says, and shows no metric
+column until one is chosen, so each run logs where to look: `browse_hint`, the address of
+`ui_path(experiment_id)`, which selects the classic view and colmo's columns (the UI's
+"Override saved view" keeps them).
+
+Metrics are logged rounded to `METRIC_DIGITS` significant digits (integer digits kept, so
+counts stay exact): MLflow's run list and run page show a metric as stored (0.833333333), and
+no setting of MLflow's changes that. The exact values are in the run's `summary.json` and
+`programs.json`. The view's metrics are logged first: MLflow's compare page plots the first
+metric a run has (the chart view, when no primary metric is set, too).
 
 Concurrency. MLflow's SQLAlchemy store creates and migrates its schema on first use without a
 lock, so sweep jobs starting together collide ("duplicate column name: step", "table already
@@ -38,25 +48,31 @@ from typing import Any, Callable, Iterator, Optional, TypeVar
 from mlflow import MlflowClient
 from mlflow.entities import Metric, Param, RunStatus
 from mlflow.exceptions import MlflowException
+from mlflow.utils.mlflow_tags import MLFLOW_EXPERIMENT_PRIMARY_METRIC_GREATER_IS_BETTER, MLFLOW_EXPERIMENT_PRIMARY_METRIC_NAME
 from mlflow.utils.validation import MAX_METRICS_PER_BATCH, MAX_PARAMS_TAGS_PER_BATCH
 
 DATABASE_FILE = "mlruns.db"
 ARTIFACTS_DIR = "mlartifacts"
 EXPERIMENT_KIND_TAG = "mlflow.experimentKind"
 CLASSIC_ML = "custom_model_development"  # MLflow 3's value for a classic (not GenAI) experiment
+PRIMARY_METRIC = "best_score"
 # A view of the run list that MLflow's UI opens from `?viewStateShareKey=colmo`: the columns a
-# person compares searches by, best score first (the UI shows no metric column unless chosen).
+# person compares searches by (the UI shows no metric column unless chosen), newest first: the
+# one order besides none under which the UI nests child runs under their parent.
 VIEW_KEY = "colmo"
 VIEW_TAG = f"mlflow.sharedViewState.{VIEW_KEY}"
 VIEW_METRICS = (
-    "best_score", "best_heldout_score", "samples", "programs_evaluated", "valid_program_rate",
+    PRIMARY_METRIC, "best_heldout_score", "runs", "samples", "programs_evaluated", "valid_program_rate",
     "evaluations_per_second", "evaluations", "steps", "seconds",
 )
 VIEW_PARAMS = ("gfo.method", "gfo.budget", "llm.name", "seed")
+VIEW_ORDER = "attributes.start_time"
 VIEW_STATE = json.dumps({
     "selectedColumns": [f"metrics.`{m}`" for m in VIEW_METRICS] + [f"params.`{p}`" for p in VIEW_PARAMS],
-    "orderByKey": "metrics.`best_score`", "orderByAsc": False,
+    "orderByKey": VIEW_ORDER, "orderByAsc": False,
 })
+METRIC_DIGITS = 4
+MLFLOW_UI_PORT = 5000  # `mlflow ui`'s default, named in the command colmo logs
 _LOCK_RETRIES = 6
 RUNNING, FINISHED, FAILED, KILLED = (RunStatus.to_string(s) for s in (RunStatus.RUNNING, RunStatus.FINISHED, RunStatus.FAILED, RunStatus.KILLED))
 
@@ -105,14 +121,20 @@ def connect(uri: str) -> MlflowClient:
 
 def open_experiment(uri: str, name: str) -> tuple[MlflowClient, str]:
     """A client on `uri` and the id of experiment `name`, created if missing (a classic ML
-    experiment, with colmo's view of its run list), safely when several processes start at once."""
-    tags = {EXPERIMENT_KIND_TAG: CLASSIC_ML, VIEW_TAG: VIEW_STATE}
+    experiment with `best_score` as its primary metric and colmo's view of its run list), safely
+    when several processes start at once. An experiment made before gets the tags it lacks, and
+    colmo's view as this colmo lays it out."""
+    tags = {
+        EXPERIMENT_KIND_TAG: CLASSIC_ML, VIEW_TAG: VIEW_STATE,
+        MLFLOW_EXPERIMENT_PRIMARY_METRIC_NAME: PRIMARY_METRIC, MLFLOW_EXPERIMENT_PRIMARY_METRIC_GREATER_IS_BETTER: "True",
+    }
     with _store_lock(uri):
         client = MlflowClient(uri)
         experiment = client.get_experiment_by_name(name)
         if experiment is not None:
             for key, value in tags.items():
-                if key not in experiment.tags:  # made by an older colmo, or by hand
+                # made by an older colmo, or by hand: a person's own settings stay, colmo's view is colmo's
+                if key not in experiment.tags or (key == VIEW_TAG and experiment.tags[key] != value):
                     client.set_experiment_tag(experiment.experiment_id, key, value)
             return client, experiment.experiment_id
         path = sqlite_path(uri)
@@ -126,6 +148,15 @@ def ui_path(experiment_id: str) -> str:
     lays them out: MLflow 3.17's UI chooses its GenAI or classic view from `workflowType`, not
     from the experiment's kind tag (which earlier 3.x UIs read)."""
     return f"/#/experiments/{experiment_id}/runs?workflowType=machine_learning&viewStateShareKey={VIEW_KEY}"
+
+
+def browse_hint(uri: str, experiment_id: str) -> str:
+    """How to see an experiment's runs in MLflow's UI: a tracking server's own address (the
+    tracking URI, `http://host:8080/...`), else the `mlflow ui` command that serves the store
+    and the address it serves it at."""
+    if uri.startswith(("http://", "https://")):
+        return uri.rstrip("/") + ui_path(experiment_id)
+    return f"mlflow ui --backend-store-uri {uri} --port {MLFLOW_UI_PORT}, then http://127.0.0.1:{MLFLOW_UI_PORT}{ui_path(experiment_id)}"
 
 
 def retry_locked(call: Callable[..., T], *args: Any, **kwargs: Any) -> T:
@@ -142,10 +173,20 @@ def retry_locked(call: Callable[..., T], *args: Any, **kwargs: Any) -> T:
 
 
 
+def rounded(value: float) -> float:
+    """`value` to `METRIC_DIGITS` significant digits, never fewer than its integer digits:
+    601.7312 -> 601.7, 0.8333333 -> 0.8333, 0.0004321 stays, 15000.0 stays."""
+    if value == 0:
+        return 0.0
+    return round(value, max(0, METRIC_DIGITS - 1 - math.floor(math.log10(abs(value)))))
+
+
 def log_metrics(client: MlflowClient, run_id: str, values: dict[str, Optional[float]], step: int) -> None:
-    """The finite values of `values` at `step` (a failed score is None or -inf: not a point)."""
+    """The finite values of `values` at `step` (a failed score is None or -inf: not a point),
+    `rounded`, the view's metrics first (module docstring)."""
     stamp = int(time.time() * 1000)
-    metrics = [Metric(k, float(v), stamp, step) for k, v in values.items() if v is not None and math.isfinite(v)]
+    first = lambda key: VIEW_METRICS.index(key) if key in VIEW_METRICS else len(VIEW_METRICS)  # noqa: E731
+    metrics = [Metric(k, rounded(float(values[k])), stamp, step) for k in sorted(values, key=first) if values[k] is not None and math.isfinite(values[k])]
     for start in range(0, len(metrics), MAX_METRICS_PER_BATCH):
         retry_locked(client.log_batch, run_id, metrics=metrics[start : start + MAX_METRICS_PER_BATCH])
 

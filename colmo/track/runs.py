@@ -15,7 +15,8 @@ What a search's run holds:
   evaluations_per_second, seconds (since the search started), ...) and `samples`, so the run
   list shows the latest of each as a column and curves can be drawn against samples,
   evaluations or seconds; at the end also `best_heldout_score` (the best program's score on
-  `evaluation.episodes` fresh episodes);
+  `evaluation.episodes` fresh episodes); each rounded to 4 significant digits, the run list's
+  metrics first (`colmo.track.backend`);
 - the programs table `programs.json` and page `programs.html` (`colmo.track.programs`),
   rewritten whole at most every `table_every_s` seconds during the run and once at the end; the
   table is registered once in MLflow's table list, so it never grows the 8000-character tag
@@ -60,7 +61,7 @@ from mlflow.utils.mlflow_tags import MLFLOW_LOGGED_ARTIFACTS, MLFLOW_PARENT_RUN_
 from colmo.config import OptimizeConfig, SearchConfig
 from colmo.record import BatchReport, SampleRecord, Summary
 from colmo.store import BEST_POLICY_FILE, BEST_SO_FAR_PLOT, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
-from colmo.track.backend import FAILED, FINISHED, KILLED, default_tracking_uri, log_metrics, log_params, open_experiment, retry_locked, sqlite_path, ui_path
+from colmo.track.backend import FAILED, FINISHED, KILLED, browse_hint, default_tracking_uri, log_metrics, log_params, open_experiment, retry_locked
 from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE, program_row, programs_page
 from colmo.track.sweep import sweep_parent, update_parent
 
@@ -172,8 +173,7 @@ def start_run(cfg: SearchConfig | OptimizeConfig, variant: str, tags: dict[str, 
     )
     log_params(client, run.info.run_id, flatten(dataclasses.asdict(cfg)))
     hydra_dir = Path(hydra.runtime.output_dir) / hydra.output_subdir if hydra.output_subdir else None  # null: no config files
-    browse = f"mlflow ui --backend-store-uri {uri}, then http://127.0.0.1:5000" if sqlite_path(uri) else uri
-    log.info("MLflow run %s in experiment %s; browse: %s%s", run.info.run_name, experiment, browse, ui_path(experiment_id))
+    log.info("MLflow run %s in experiment %s; browse: %s", run.info.run_name, experiment, browse_hint(uri, experiment_id))
     return TrackedRun(client, experiment_id, run.info.run_id, run.info.run_name, parent_id, sweep_dir, hydra_dir)
 
 
