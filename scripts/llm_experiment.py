@@ -19,7 +19,9 @@ to the task's `target_score`; final best and held-out score, mean ± std and per
 evaluated, per 100 model calls, duplicate and valid-program rates; and, for two variants, a
 bootstrap interval of the difference of their mean final bests (seeds resampled with
 replacement within each variant; with 3 seeds a variant it is coarse, and it says so).
-Runs still going, or stopped, are listed and left out of the figures.
+Runs still going, or stopped, are listed and left out of the figures; the share of model calls
+that yield an evaluated program is read from every run's store, finished or not, over its first
+`--first` (48) model calls and over all it has settled.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ import argparse
 import json
 import re
 import shlex
+import sqlite3
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -38,10 +41,10 @@ import numpy as np
 import yaml
 from matplotlib.figure import Figure
 
-from colmo.record import FINISHED
+from colmo.record import EVALUATED, FINISHED, PENDING
 from colmo.report.figure import COLORS, draw_seeds
 from colmo.report.tables import mean_std
-from colmo.store import SUMMARY_FILE
+from colmo.store import STORE_FILE, SUMMARY_FILE
 
 REPORT_FILE = "report.md"
 PLOT_FILE = "best_so_far.png"
@@ -152,6 +155,69 @@ def read_runs(out: Path) -> tuple[dict[str, list[Run]], list[str]]:
     return variants, unfinished
 
 
+@dataclass(frozen=True)
+class CallYield:
+    """What a run's model calls yielded, from its store: over its first `first` calls (None if it
+    has not settled that many yet) and over every call settled so far."""
+
+    variant: str
+    seed: int
+    calls: int
+    evaluated: int
+    first_evaluated: Optional[int]
+
+    @property
+    def per_100(self) -> float:
+        return 100 * self.evaluated / self.calls if self.calls else 0.0
+
+
+def call_yield(run_dir: Path, first: int) -> Optional[CallYield]:
+    """The model-call yield of a run (finished or still running: its store is read, not written)."""
+    path = run_dir / STORE_FILE
+    if not path.is_file():
+        return None
+    try:
+        with sqlite3.connect(f"file:{path}?mode=ro", uri=True) as store:
+            rows = store.execute("SELECT status, model_calls FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
+    except sqlite3.DatabaseError:  # not a store yet (a run that has just started)
+        return None
+    calls = evaluated = 0
+    first_evaluated = None
+    for status, model_calls in rows:
+        if status == PENDING:  # generated, not settled yet: neither counted nor anything after it
+            break
+        if calls + model_calls > first and first_evaluated is None:
+            first_evaluated = evaluated
+        calls, evaluated = calls + model_calls, evaluated + (status == EVALUATED)
+    if calls >= first and first_evaluated is None:
+        first_evaluated = evaluated
+    return CallYield(run_dir.parent.name, int(run_dir.name[1:]), calls, evaluated, first_evaluated)
+
+
+def yield_lines(out: Path, first: int) -> list[str]:
+    """The report's section on model calls that yield an evaluated program, per run and per variant."""
+    runs = [y for d in sorted(out.glob("*/s*")) if d.name[1:].isdigit() and (y := call_yield(d, first)) is not None]
+    if not runs:
+        return []
+    lines = [
+        "", "## Model calls that yield an evaluated program (each run's store, finished or not)", "",
+        f"A call's answer is evaluated unless it is a duplicate (thrown away and generated again, or stored as one), "
+        f"unusable or failed. First {first} calls: the programs evaluated among the answers to a run's first {first} model calls.", "",
+        f"| Variant | Seed | Calls settled | Programs evaluated | per 100 calls | First {first} calls: evaluated | per 100 |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for y in sorted(runs, key=lambda y: (y.variant, y.seed)):
+        head = "— | —" if y.first_evaluated is None else f"{y.first_evaluated} | {100 * y.first_evaluated / first:.1f}"
+        lines.append(f"| {y.variant} | {y.seed} | {y.calls} | {y.evaluated} | {y.per_100:.1f} | {head} |")
+    lines += ["", f"Per variant, over the runs with at least {first} calls settled (mean ± sample std, each seed):", ""]
+    for variant in sorted({y.variant for y in runs}):
+        shares = [(y.seed, 100 * y.first_evaluated / first) for y in runs if y.variant == variant and y.first_evaluated is not None]
+        if shares:
+            each = ", ".join(f"s{seed} {share:.1f}" for seed, share in shares)
+            lines.append(f"- {variant}: {mean_std([share for _, share in shares], 1)} per 100 of the first {first} calls over {len(shares)} seeds ({each})")
+    return lines
+
+
 def bootstrap_difference(first: Sequence[float], second: Sequence[float], draws: int = BOOTSTRAP_DRAWS, seed: int = 0) -> tuple[float, float, float]:
     """The difference of means `second - first` and its 95% percentile bootstrap interval
     (seeds resampled with replacement within each group)."""
@@ -169,7 +235,7 @@ def _cell(values: Sequence[Optional[float]], digits: int = 1) -> str:
     return mean_std(present, digits) + ("" if len(present) == len(values) else f" ({len(present)}/{len(values)} seeds)")
 
 
-def report_lines(variants: dict[str, list[Run]], unfinished: list[str], command: str) -> list[str]:
+def report_lines(variants: dict[str, list[Run]], unfinished: list[str], command: str, call_yields: Sequence[str] = ()) -> list[str]:
     lines = [
         "# Language-model experiment", "", f"Made with `{command}` from each run's `summary.json`.", "",
         "Model calls count every answer of the model (duplicates thrown away and generated again included);",
@@ -215,7 +281,9 @@ def report_lines(variants: dict[str, list[Run]], unfinished: list[str], command:
             f"{names[1]} − {names[0]}: {difference:+.1f}, 95% bootstrap interval [{low:+.1f}, {high:+.1f}] "
             f"({BOOTSTRAP_DRAWS:,} resamples of the seeds within each variant){coarse}; the interval {verdict}.",
         ]
-    lines += ["", "## Best so far", "", f"![best so far against model calls]({PLOT_FILE})", ""]
+    lines += [*call_yields, ""]
+    if variants:
+        lines += ["## Best so far", "", f"![best so far against model calls]({PLOT_FILE})", ""]
     if unfinished:
         lines += ["## Not counted (not finished)", "", *unfinished, ""]
     return lines
@@ -235,13 +303,15 @@ def best_so_far_figure(variants: dict[str, list[Run]]) -> Figure:
     return figure
 
 
-def write_report(out: Path, report: Path, command: str) -> Path:
+def write_report(out: Path, report: Path, command: str, first: int = 48) -> Path:
     variants, unfinished = read_runs(out)
-    if not variants:
-        raise SystemExit(f"llm_experiment: error: no finished run under {out}")
+    call_yields = yield_lines(out, first)
+    if not variants and not call_yields:
+        raise SystemExit(f"llm_experiment: error: no run under {out}")
     report.parent.mkdir(parents=True, exist_ok=True)
-    best_so_far_figure(variants).savefig(report.parent / PLOT_FILE, dpi=130)
-    report.write_text("\n".join(report_lines(variants, unfinished, command)).rstrip() + "\n")
+    if variants:  # the figure and the difference are of finished runs
+        best_so_far_figure(variants).savefig(report.parent / PLOT_FILE, dpi=130)
+    report.write_text("\n".join(report_lines(variants, unfinished, command, call_yields)).rstrip() + "\n")
     return report
 
 
@@ -255,6 +325,7 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
     report = commands.add_parser("report", help="report.md and best_so_far.png from the runs under OUT")
     report.add_argument("out", type=Path)
     report.add_argument("--out", dest="report", type=Path, help="the Markdown file (default OUT/report.md)")
+    report.add_argument("--first", type=int, default=48, help="the model-call yield over each run's first this many calls (default 48)")
     argv = list(sys.argv[1:] if argv is None else argv)
     # The overrides after `--`, split off here: argparse's subcommands do not take `--` well.
     ours, overrides = (argv[: argv.index("--")], argv[argv.index("--") + 1 :]) if "--" in argv else (argv, [])
@@ -262,7 +333,7 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
     if args.command == "run":
         sys.exit(run_all(args.out, args.variant, args.seeds, overrides))
     command = "python scripts/llm_experiment.py " + shlex.join(argv)
-    print(write_report(args.out, args.report or args.out / REPORT_FILE, command))
+    print(write_report(args.out, args.report or args.out / REPORT_FILE, command, args.first))
 
 
 if __name__ == "__main__":

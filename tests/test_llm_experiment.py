@@ -75,3 +75,35 @@ def test_the_bootstrap_interval_of_equal_groups_includes_zero():
     difference, low, high = llm_experiment.bootstrap_difference([1.0, 5.0, 9.0], [1.0, 5.0, 9.0])
     assert difference == 0.0 and low < 0 < high
     assert llm_experiment.bootstrap_difference([1.0, 2.0], [11.0, 12.0]) == pytest.approx((10.0, 9.0, 11.0))
+
+
+def write_store(run_dir: Path, settled: list[tuple[str, int]], pending: int = 0) -> None:
+    """A run's store: the starter, then samples settled as (status, model calls), then `pending` ones."""
+    from colmo.generate import Generation
+    from colmo.record import PENDING, Sample, SampleRecord
+    from colmo.store import STORE_FILE, ProgramStore
+
+    run_dir.mkdir(parents=True)
+    store = ProgramStore(run_dir / STORE_FILE)
+    rows = [("evaluated", 1), *settled, *[(PENDING, 1)] * pending]
+    store.add(*(
+        SampleRecord.of(Sample(index - 1, index, 0, (), Generation("answer", "test", calls=calls)), status)
+        for index, (status, calls) in enumerate(rows)
+    ))
+    store.close()
+
+
+def test_the_model_call_yield_is_read_from_every_runs_store_over_its_first_calls(tmp_path):
+    # 3 calls for the first answer (two duplicates thrown away), then 45 single calls of which 30
+    # are evaluated: 31 evaluated of the first 48 calls; 2 more calls settled, 1 evaluated; one pending.
+    write_store(tmp_path / "gfo-oneplusone" / "s0", [("evaluated", 3), *[("evaluated", 1)] * 30, *[("duplicate", 1)] * 10, *[("failed", 1)] * 5,
+                                                     ("evaluated", 1), ("unusable", 1)], pending=1)
+    write_store(tmp_path / "gfo-oneplusone" / "s1", [("evaluated", 1)] * 20)  # still running: fewer than 48 calls so far
+    first = llm_experiment.call_yield(tmp_path / "gfo-oneplusone" / "s0", 48)
+    assert (first.calls, first.evaluated, first.first_evaluated) == (50, 32, 31)
+    short = llm_experiment.call_yield(tmp_path / "gfo-oneplusone" / "s1", 48)
+    assert (short.calls, short.first_evaluated) == (20, None)
+    markdown = llm_experiment.write_report(tmp_path, tmp_path / "report.md", "report").read_text()  # no run finished: the yield alone
+    assert "| gfo-oneplusone | 0 | 50 | 32 | 64.0 | 31 | 64.6 |" in markdown
+    assert "| gfo-oneplusone | 1 | 20 | 20 | 100.0 | — | — |" in markdown
+    assert "gfo-oneplusone: 64.6 per 100 of the first 48 calls over 1 seeds (s0 64.6)" in markdown
