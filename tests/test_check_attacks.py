@@ -1,6 +1,6 @@
-"""The static check against the third red-team pass (issue 24 part 6): a builtin's name is the
-builtin only where the program leaves it unbound, every part of a call is visited, and byte
-views of array buffers are refused; the well-behaved policies still pass."""
+"""The static check against the red-team passes of issue 24 (part 6): a builtin's name is the
+builtin only where the program leaves it unbound, every part of a call is visited, byte views
+of array buffers and arrays over them are refused; the well-behaved policies still pass."""
 
 from __future__ import annotations
 
@@ -54,6 +54,29 @@ def test_byte_views_of_an_object_array_are_refused(view):
     code = f"import numpy as np\ndef policy(obs):\n    a = np.array([None, obs])\n    b = {view}\n    return 0.0"
     with pytest.raises(ForbiddenProgram, match="forbidden"):
         check_program(code, ALLOWED)
+
+
+# An array over an object array's buffer is a writable array of its pointers (numpy exports the
+# buffer): writing an address there and reading the element back hands out any object.
+POINTER_ARRAYS = {
+    "frombuffer": ("import numpy as np", "np.frombuffer(a, np.uint64)"),
+    "frombuffer imported": ("from numpy import frombuffer", "frombuffer(a, 'u8')"),
+    "ndarray imported": ("from numpy import ndarray", "ndarray((2,), 'u8', a)"),
+    "ndarray imported as": ("from numpy import ndarray as view", "view((2,), 'u8', a)"),
+    "ndarray from a star import": ("from numpy import *", "ndarray((2,), 'u8', a)"),
+    "ndarray as a default": ("from numpy import *", "(lambda ndarray=ndarray: ndarray((2,), 'u8', a))()"),
+}
+
+
+@pytest.mark.parametrize("imports, view", POINTER_ARRAYS.values(), ids=POINTER_ARRAYS.keys())
+def test_an_array_over_an_object_arrays_pointers_is_refused(imports, view):
+    code = f"{imports}\nimport numpy as np\ndef policy(obs):\n    a = np.array([None, obs])\n    b = {view}\n    return 0.0"
+    with pytest.raises(ForbiddenProgram, match=r"forbidden: (\.frombuffer|import numpy\.(frombuffer|ndarray)|ndarray)"):
+        check_program(code, ALLOWED)
+
+
+def test_a_star_import_of_numpy_stays_allowed():
+    check_program("from numpy import *\ndef policy(obs):\n    return float(sin(obs[0]) * pi)", ALLOWED)
 
 
 @pytest.mark.parametrize("keyword", ["key=open", "key=__import__", "key=np.ndarray", "key=np.load"])

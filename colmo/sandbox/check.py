@@ -21,7 +21,9 @@ Refused:
   `recarray`, `chararray`, `matrix`, `memmap`; `isinstance(x, np.ndarray)` stays allowed),
   `resize` (frees a buffer under live views with `refcheck=False`), `setflags`; byte views of
   a buffer (`.data`, `.cast`, `.tobytes`, `memoryview`: of an object array they expose its
-  pointers); the `isinstance` exception holds only while `isinstance` is the builtin;
+  pointers) and arrays over one (`frombuffer`: over an object array, a writable array of its
+  pointers); the `isinstance` exception holds only while `isinstance` is the builtin, and
+  `ndarray` is never a name of its own (`from numpy import ndarray`, or `*`);
 - decorators (a decorator can rebind a function's name to a shared object, whose attributes
   the assignment rule below would then allow), class definitions, `global`, `nonlocal`;
 - attribute assignment or deletion except on the program's own functions (`policy.state = 0`),
@@ -52,8 +54,9 @@ FORBIDDEN_ATTRIBUTES = frozenset({
     "popen", "format", "format_map", "mro",
     # raw memory
     "object_", "resize", "setflags", "recarray", "chararray", "matrix", "record",
-    # byte views of an array's buffer: of an object array, they read and write its pointers
-    "data", "cast", "tobytes", "tostring", "getbuffer",
+    # byte views of an array's buffer, and arrays over one: of an object array, they read and
+    # write its pointers (np.frombuffer(np.array([None, x]), np.uint64) is writable)
+    "data", "cast", "tobytes", "tostring", "getbuffer", "frombuffer",
 })
 # Array constructors that take a buffer: allowed only as the class in isinstance(x, np.ndarray).
 _BUFFER_CLASSES = frozenset({"ndarray"})
@@ -140,9 +143,12 @@ class _Checker(ast.NodeVisitor):
             module = "." * node.level + (node.module or "")
             if node.level or not module_allowed(module, self.allowed):
                 return f"import {module}"
-            return next((f"import {module}.{a.name}" for a in node.names if a.name != "*" and not attribute_allowed(a.name)), None)
+            refused = (a.name for a in node.names if a.name != "*" and (not attribute_allowed(a.name) or a.name in _BUFFER_CLASSES))
+            return next((f"import {module}.{name}" for name in refused), None)
         if isinstance(node, ast.Name):
-            if node.id.startswith("__") or (node.id in FORBIDDEN_NAMES and node.id not in self.bound):
+            # A buffer class under a name of its own comes from a star import (`def f(ndarray=ndarray)`
+            # binds the name, and its default is the class): refused whatever the program binds.
+            if node.id.startswith("__") or node.id in _BUFFER_CLASSES or (node.id in FORBIDDEN_NAMES and node.id not in self.bound):
                 return node.id
             return None
         if isinstance(node, ast.Attribute):
