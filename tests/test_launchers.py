@@ -68,4 +68,4 @@ def test_optuna_sweeper_runs_trials_that_search(tmp_path):
     for child in children:
         assert child.data.params["gfo.budget"] in ("2", "3", "4")  # integers from the interval
         assert child.data.params["database.num_islands"] in ("1", "2")
-    assert parents[0].data.metrics["best_score"] == max(s["best_score"] for s in summaries)
+    assert parents[0].data.metrics["best_score"] == pytest.approx(max(s["best_score"] for s in summaries), rel=5e-4)  # logged at 4 significant digits

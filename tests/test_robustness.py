@@ -169,7 +169,7 @@ def test_a_search_with_evaluation_robustness_saves_and_logs_its_best_policys_rep
     client = MlflowClient(f"sqlite:///{tmp_path / 'mlruns.db'}")
     (logged,) = client.search_runs([client.get_experiment_by_name("pendulum").experiment_id])
     for name in ("robustness_nominal", "robustness_worst", "robustness_all_10", "robustness_failures"):
-        assert logged.data.metrics[name] == pytest.approx(robustness[name]), name
+        assert logged.data.metrics[name] == pytest.approx(robustness[name], rel=5e-4), name  # logged at 4 significant digits
     assert {f.path for f in client.list_artifacts(logged.info.run_id, "robustness")} == {f"robustness/{name}" for name in robustness["files"]}
 
 
