@@ -222,7 +222,6 @@ def run_filter(program: list[tuple[int, int, int, int]], arch: int, nr: int, arg
         taken = {
             seccomp.BPF_JEQ_K: accumulator == k,
             seccomp.BPF_JGE_K: accumulator >= k,
-            seccomp.BPF_JSET_K: bool(accumulator & k),
         }[code]
         pc += 1 + (jump_true if taken else jump_false)
 
@@ -244,7 +243,7 @@ def test_filter_decisions(machine: str) -> None:
     numbers = syscalls.SYSCALL_NUMBERS[machine]
     arch = syscalls.AUDIT_ARCH[machine]
     assert len(program) <= 4096
-    jumps = (seccomp.BPF_JEQ_K, seccomp.BPF_JGE_K, seccomp.BPF_JSET_K)
+    jumps = (seccomp.BPF_JEQ_K, seccomp.BPF_JGE_K)
     for index, (code, jump_true, jump_false, _) in enumerate(program):
         if code in jumps:
             assert index + 1 + max(jump_true, jump_false) < len(program)
@@ -261,7 +260,6 @@ def test_filter_decisions(machine: str) -> None:
             if name in numbers:
                 assert decide(name) == EPERM, name
     assert decide("openat2") == ENOSYS
-    assert decide("clone3") == ENOSYS
 
     at_fdcwd = 0xFFFFFF9C
     for flags in OPEN_FLAGS:
@@ -271,10 +269,9 @@ def test_filter_decisions(machine: str) -> None:
         assert decide(name) == EPERM, name
 
     pthread_flags = 0x3D0F00  # glibc pthread_create: VM|FS|FILES|SIGHAND|THREAD|SYSVSEM|SETTLS...
-    assert decide("clone", pthread_flags) == ALLOW
-    assert decide("clone", signal.SIGCHLD) == EPERM  # fork
-    assert decide("clone", 0x4000 | 0x100 | signal.SIGCHLD) == EPERM  # vfork + CLONE_VM
-    assert decide("clone", pthread_flags | 0x10000000) == EPERM  # CLONE_NEWUSER
+    for flags in (pthread_flags, signal.SIGCHLD, 0x4000 | 0x100 | signal.SIGCHLD, pthread_flags | 0x10000000):
+        assert decide("clone", flags) == EPERM, hex(flags)  # a thread, fork, vfork, a user namespace
+    assert decide("clone3") == EPERM
 
     assert decide("prlimit64", 0, 7, 0, 0x1000) == ALLOW  # getrlimit
     assert decide("prlimit64", 0, 7, 0x1000, 0) == EPERM
@@ -551,26 +548,25 @@ def test_networking_is_refused() -> None:
 
 
 @needs_seccomp
-def test_new_processes_are_refused_but_threads_work() -> None:
+def test_new_processes_and_threads_are_refused() -> None:
+    def start_a_thread() -> None:
+        try:
+            threading.Thread(target=lambda: None).start()
+        except RuntimeError:  # "can't start new thread": Python drops the errno
+            raise PermissionError(errno.EPERM, "can't start new thread") from None
+
     def probe() -> dict:
-        thread_ran = []
-        worker = threading.Thread(target=lambda: thread_ran.append(True))
-        thread_result = outcome(worker.start)
-        worker.join()
         return {
             "fork": outcome(os.fork),
             "subprocess": outcome(lambda: subprocess.run(["/bin/true"], check=False)),
             "posix_spawn": outcome(lambda: os.posix_spawn("/bin/true", ["true"], {})),
             "execv": outcome(lambda: os.execv("/bin/true", ["true"])),
-            "thread": thread_result,
-            "thread ran": thread_ran == [True],
+            "thread": outcome(start_a_thread),
+            "pthread_create": errno.errorcode[LIBC.pthread_create(ctypes.byref(ctypes.c_ulong()), None, LIBC.getpid, None)],
         }
 
-    report = run_in_child(confined(probe))
-    for name in ("fork", "subprocess", "posix_spawn", "execv"):
-        assert report[name] == "EPERM", name
-    assert report["thread"] == "ok"
-    assert report["thread ran"] is True
+    report = probe_results(run_in_child(confined(probe)))
+    assert report == dict.fromkeys(report, "EPERM")
 
 
 @needs_seccomp
@@ -698,9 +694,12 @@ def test_a_call_through_another_abi_kills_the_process(foreign_call) -> None:
 def _numerics() -> dict:
     """The same computation in the parent and in the child: their results must agree."""
     generator = np.random.default_rng(7)
-    matrix = generator.normal(size=(200, 200)) + 200 * np.eye(200)
-    solution = np.linalg.solve(matrix, np.arange(200.0))
-    product = generator.normal(size=(600, 600)) @ generator.normal(size=(600, 600))  # threads
+    # Sizes below OpenBLAS's threading thresholds: a confined child has no threads (this test's
+    # BLAS has a thread per core), the sandbox worker's BLAS is single-threaded (test_hostile
+    # evaluates a program with large ones there).
+    matrix = generator.normal(size=(50, 50)) + 50 * np.eye(50)
+    solution = np.linalg.solve(matrix, np.arange(50.0))
+    product = generator.normal(size=(60, 60)) @ generator.normal(size=(60, 60))
     spectrum = np.fft.rfft(np.sin(np.linspace(0.0, 20.0, 1024)))
     legacy = np.random.RandomState(3).uniform(size=4)
     big = np.ones(50_000_000, dtype=np.uint8)  # 50 MB: mmap and munmap

@@ -335,6 +335,20 @@ def test_a_program_cannot_carry_state_between_evaluations(sandbox):
     assert first.failure is None and same_outcome(sandbox.evaluate(program, episodes=2), first)
 
 
+def test_large_linear_algebra_runs_without_threads(sandbox):
+    """A confined child may start no thread: the worker's BLAS is single-threaded (its
+    environment says so), else a product or a solve large enough for its thread pool would
+    fail to start one and hang until the deadline."""
+    program = (
+        "import numpy as np\n\ndef policy(obs):\n    if not hasattr(policy, 'value'):\n"
+        "        generator = np.random.default_rng(7)\n        product = generator.normal(size=(600, 600)) @ generator.normal(size=(600, 600))\n"
+        "        solution = np.linalg.solve(generator.normal(size=(300, 300)) + 300 * np.eye(300), np.ones(300))\n"
+        "        policy.value = float(np.tanh(product.trace() * 1e-9 + solution[0]))\n    return policy.value\n"
+    )
+    evaluation = sandbox.evaluate(program)
+    assert evaluation.failure is None and evaluation.steps == 1000, evaluation.failure
+
+
 def test_printing_megabytes_neither_breaks_nor_blocks_the_protocol(sandbox, baseline):
     program = GOOD.replace("def policy(obs):\n", "print('x' * 10 ** 8)\n\ndef policy(obs):\n    print(obs, 'y' * 10 ** 5)\n")
     assert same_outcome(sandbox.evaluate(program), baseline["good"])

@@ -13,10 +13,12 @@ Each test runs a script in a fresh interpreter in one of the four modes:
   process tree (inherited by the sandbox workers it starts) answers EPERM to `unshare` and
   `clone` with CLONE_NEWUSER and ENOSYS to `clone3`. The script checks the mode it is in.
 
-The corpus of the third red-team pass, written anew: isinstance rebinding, object-array byte
-views, unchecked keywords, forged step counts, pre-sent actions, cubic extraction, ioctl
-metadata writes, /proc reads of the coordinator, the worker and the other worker; each one
-runs beside a well-behaved program on the other worker, which must score as it does alone.
+The corpus of the red-team passes, written anew: isinstance rebinding, object-array byte
+views and pointer arrays, unchecked keywords, forged step counts, pre-sent actions, cubic
+extraction, ioctl metadata writes, /proc reads of the coordinator, the worker and the other
+worker, and the resources the kernel counts per user (threads, POSIX timers, descriptors),
+which a child shares with the coordinator and the other worker; each one runs beside a
+well-behaved program on the other worker, which must score as it does alone.
 """
 
 from __future__ import annotations
@@ -118,6 +120,14 @@ CONFINED_CHILD = ENTER_MODE + textwrap.dedent(
         remote = (ctypes.c_void_p * 2)(id(os.environ), 8)
         checked(libc.process_vm_readv(coordinator, local, 1, remote, 1, 0))
 
+    def start_a_thread():
+        number = libc.pthread_create(ctypes.byref(ctypes.c_ulong()), None, libc.getpid, None)
+        if number:
+            raise OSError(number, os.strerror(number))
+
+    def posix_timer():
+        checked(libc.timer_create(1, None, ctypes.byref(ctypes.c_void_p())))  # CLOCK_MONOTONIC
+
     read_fd, write_fd = os.pipe()
     pid = os.fork()
     if pid == 0:
@@ -131,6 +141,10 @@ CONFINED_CHILD = ENTER_MODE + textwrap.dedent(
                 "coordinator fd": outcome(lambda: read(f"/proc/{coordinator}/fd/{read_fd}")),
                 "process_vm_readv": outcome(vm_read),
                 "unshare user namespace": outcome(lambda: checked(libc.unshare(0x10000000))),
+                # What the kernel counts per user, shared with the coordinator and its workers:
+                "a thread": outcome(start_a_thread),
+                "a POSIX timer": outcome(posix_timer),
+                "64 pipes": outcome(lambda: [os.pipe() for _ in range(64)]),
             }
             os.write(write_fd, json.dumps(report).encode())
         except BaseException as error:
@@ -264,6 +278,16 @@ CORPUS = {
         libc_call(f"libc.syscall(434, {OTHER_WORKERS}[0], 0)"), True, "fast", 1, "exception: SystemExit: 1",  # pidfd_open
     ),
     "a user namespace of its own": (libc_call(f"libc.unshare({NEW_USER_NAMESPACE})"), True, "fast", 1, "exception: SystemExit: 1"),
+    "object-array pointer view": (policy_doing("a = np.array([None, obs])\n    b = np.frombuffer(a, np.uint64)"), False, "fast", 1, "forbidden: .frombuffer"),
+    # Per-user resources (the coordinator's and the other worker's too, where nobody is shared
+    # or there is no user drop): threads, POSIX timers, descriptors.
+    "a hundred threads": (
+        policy_doing("lock = sys.modules['_thread'].allocate_lock()\n    lock.acquire()\n"
+                     "    for _ in range(100):\n        sys.modules['_thread'].start_new_thread(lock.acquire, ())", "import sys"),
+        True, "fast", 1, "exception: RuntimeError: can't start new thread",
+    ),
+    "POSIX timers": (libc_call("libc.timer_create(1, None, buffer)"), True, "fast", 1, "exception: SystemExit: 11"),  # EAGAIN
+    "a hundred pipes": (policy_doing("pipes = [os.pipe() for _ in range(100)]", "import os"), True, "fast", 1, "exception: OSError: [Errno 24] "),
 }
 CUBIC_EXTRACTION = GOOD + "@x\n" * 600  # a policy followed by 600 lines of `@x`: 2 kB
 
@@ -367,12 +391,17 @@ def run_in_mode(request, tmp_path):
 
 
 @in_every_mode()
-def test_a_confined_child_reads_no_file_and_no_proc_entry(run_in_mode) -> None:
+def test_a_confined_child_reads_no_file_and_no_proc_entry_and_takes_no_per_user_resource(run_in_mode) -> None:
+    """Per-user resources: a thread counts against the user's processes and takes a PID, a POSIX
+    timer reserves a queued signal of the user's, a descriptor can hold pipe buffers and epoll
+    watches of the user's; a child that took them all made the coordinator's forks, timers and
+    pipes fail while it ran."""
     report = run_in_mode(CONFINED_CHILD)
     for field in ("uid", "user namespaces"):
         report.pop(field)
     assert "seccomp" in report.pop("layers")
-    assert report == dict.fromkeys(report, "EPERM")
+    per_user = {"a thread": "EPERM", "a POSIX timer": "EAGAIN", "64 pipes": "EMFILE"}
+    assert report == {**dict.fromkeys(report, "EPERM"), **per_user}
 
 
 @in_every_mode(slow_but=HARDEST_MODE)  # half a minute each; root's is also test_hostile's default mode

@@ -21,17 +21,23 @@ SIGKILL: it may ignore other signals.
 
 What the child can still do, by design: read what it already holds open (nothing else: the
 filter refuses every open, read-only included, so whatever it needs must be imported or opened
-in the zygote before the fork); see file names and metadata (stat, getdents); use the CPU and memory its rlimits allow; start threads; write to
-the descriptors it kept. Other processes running as the unprivileged uid (nobody, by default)
-share it with the child: pass a uid nothing else uses where that matters.
+in the zygote before the fork); see file names and metadata (stat, getdents); use the CPU and
+memory its rlimits allow, on one thread (the filter refuses threads); write to the descriptors
+it kept. Other processes running as the unprivileged uid (nobody, by default) share it with
+the child: pass a uid nothing else uses where that matters.
 
 Layers, in the order `confine()` applies them; when the kernel refuses one, the others still
 apply and `Confinement.warnings` says what is missing:
 
 0. `enter_sandbox` first (colmo's own part, before the kernel layers): resource limits on
    address space and CPU time (the worker set the file size limit to 0), only the descriptors
-   the child needs, and the Python-level process and signal functions of `os`, `posix` and
+   the child needs and no new ones beyond the highest of them, no pending signals queued on
+   its account, and the Python-level process and signal functions of `os`, `posix` and
    `_posixsubprocess` replaced by ones that refuse (a second line where seccomp is missing).
+   The last two limits bound what the kernel counts per user, not per process, and so shares
+   with every other process of the uid (the coordinator's, in a run without root): pipe
+   buffers and epoll watches (through descriptors), and POSIX timers, each of which reserves
+   a queued signal (96,000 of them made every `timer_create` of the user fail).
 1. `no_dump`: prctl(PR_SET_DUMPABLE, 0). Processes of the same uid (the other children) cannot
    ptrace it, read its memory or its /proc/<pid>/ files (the kernel makes them root's).
    `no_new_privs`: prctl(PR_SET_NO_NEW_PRIVS, 1), required for an unprivileged process to install
@@ -211,7 +217,13 @@ def enter_sandbox(keep_fds: Collection[int], memory_mb: int, cpu_seconds: float)
     _limit(resource.RLIMIT_AS, memory_mb * 1024 * 1024)
     # The soft limit sends SIGXCPU, which kills: the worker reports "cpu time".
     _limit(resource.RLIMIT_CPU, int(cpu_seconds) + 1)
-    close_inherited_fds({0, 1, 2, *keep_fds})
+    kept = {0, 1, 2, *keep_fds}
+    close_inherited_fds(kept)
+    # Per-user kernel counters (module docstring): a new descriptor only in a free number below
+    # the highest kept one, and no signal queued on the child's account (a signal the kernel
+    # sends, SIGXCPU or SIGKILL, is delivered all the same).
+    _limit(resource.RLIMIT_NOFILE, max(kept) + 1)
+    _limit(resource.RLIMIT_SIGPENDING, 0)
     for module_name, names in _DISARMED.items():
         module = sys.modules.get(module_name)
         for name in names:

@@ -11,8 +11,8 @@ thread gets it (threads and children inherit it, and it cannot be removed):
 * answers ENOSYS to numbers above the newest call reviewed here (`listns`, 470), so a call
   added by a future kernel is refused until someone reviews it (C libraries fall back on
   ENOSYS);
-* answers ENOSYS to `openat2` (flags in a struct BPF cannot read) and `clone3` (ditto), so
-  glibc falls back to `openat` and `clone`, which are checked;
+* answers ENOSYS to `openat2` (flags in a struct BPF cannot read), so glibc falls back to
+  `openat`, which is refused;
 * answers EPERM, so that the program sees an error and reports it, to:
 
   - the file system, reads included: `open` and `openat` with any flags (the child runs on
@@ -34,8 +34,11 @@ thread gets it (threads and children inherit it, and it cannot be removed):
     `shutdown`, `getsockname`, `getpeername`, `setsockopt`, `getsockopt` (the reply goes
     down a pipe with write(); an inherited socket, if any, still takes read/write, but
     cannot pass descriptors);
-  - new processes and other processes: `execve`, `execveat`, `fork`, `vfork`, `clone`
-    without CLONE_THREAD or with any CLONE_NEW* namespace flag, `ptrace`,
+  - new processes, threads and other processes: `clone` and `clone3` whatever their flags
+    (a thread takes one of the system's PIDs and counts against the user's process limit,
+    so thousands of them would make the user's other forks fail, the other workers' and the
+    coordinator's, and they would spread one evaluation's CPU-time limit over every core),
+    `execve`, `execveat`, `fork`, `vfork`, `ptrace`,
     `process_vm_readv`, `process_vm_writev`, `process_madvise`, `process_mrelease`, `kcmp`,
     `migrate_pages`, `move_pages`, `kill`, `tkill`, `tgkill`, `rt_sigqueueinfo`,
     `rt_tgsigqueueinfo`, `pidfd_open`, `pidfd_send_signal`, `pidfd_getfd`, `setpgid`,
@@ -71,10 +74,11 @@ thread gets it (threads and children inherit it, and it cannot be removed):
 What stays allowed, and why: everything else the computation needs (mmap, munmap, mremap,
 brk, madvise, mprotect, futex, read/write/pread/pwrite/lseek/close/dup on descriptors it
 already has, pipe2, eventfd, epoll, poll, clock_gettime, nanosleep, getrandom, rt_sig*
-on itself, sched_yield, sched_getaffinity, rseq, exit, exit_group); `clone` with
-CLONE_THREAD, because OpenBLAS restarts its thread pool in a forked child (refused, it
-calls exit(), which then hangs) and a thread has exactly the rights of its process (same
-filter, same credentials, same rlimits); stat, getdents, readlink, access (names and
+on itself, sched_yield, sched_getaffinity, rseq, exit, exit_group; what it creates of
+these is bounded by the descriptor and pending-signal limits `colmo.sandbox.confine` sets);
+no threads: a numerical library that starts a thread pool in the child fails (OpenBLAS
+calls exit(), which then hangs until the deadline), so the worker runs with one thread per
+library (`OPENBLAS_NUM_THREADS=1`, ... in its environment); stat, getdents, readlink, access (names and
 metadata, no contents); mmap/mprotect with PROT_EXEC: a program that reaches native code can
 already call any libc function, so shellcode would gain nothing, and refusing executable
 memory breaks libffi closures and loaders; `landlock_*` (it can only restrict).
@@ -103,7 +107,6 @@ SECCOMP_RET_ALLOW = 0x7FFF0000
 BPF_LD_W_ABS = 0x00 | 0x00 | 0x20
 BPF_JEQ_K = 0x05 | 0x10 | 0x00
 BPF_JGE_K = 0x05 | 0x30 | 0x00
-BPF_JSET_K = 0x05 | 0x40 | 0x00
 BPF_RET_K = 0x06 | 0x00
 _BPF_MAXINSNS = 4096
 _BPF_MAX_JUMP = 255
@@ -150,17 +153,6 @@ def _return_if_equal(values: list[int], action: int) -> list[Instruction]:
     return program
 
 
-def _allow_only_threads() -> list[Instruction]:
-    # clone's flags are its first argument on x86_64 and on aarch64; only the low word is used.
-    return [
-        _statement(BPF_LD_W_ABS, _arg_low(0)),
-        _jump(BPF_JSET_K, syscalls.CLONE_NAMESPACES, 1, 0),
-        _jump(BPF_JSET_K, syscalls.CLONE_THREAD, 1, 0),
-        _statement(BPF_RET_K, _errno(errno.EPERM)),
-        _statement(BPF_RET_K, SECCOMP_RET_ALLOW),
-    ]
-
-
 def _deny_commands(command_argument: int, commands: tuple[int, ...]) -> list[Instruction]:
     return [
         _statement(BPF_LD_W_ABS, _arg_low(command_argument)),
@@ -192,7 +184,6 @@ def _deny_setting_limits() -> list[Instruction]:
 
 def argument_checks() -> dict[str, list[Instruction]]:
     return {
-        "clone": _allow_only_threads(),
         "fcntl": _deny_commands(1, syscalls.DENIED_FCNTL_COMMANDS),
         "ioctl": _allow_commands(1, syscalls.ALLOWED_IOCTL_COMMANDS),
         "prlimit64": _deny_setting_limits(),

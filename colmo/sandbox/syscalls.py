@@ -116,8 +116,13 @@ DENIED: dict[str, tuple[str, ...]] = {
         "sendmsg", "sendmmsg", "recvfrom", "recvmsg", "recvmmsg", "shutdown", "getsockname",
         "getpeername", "setsockopt", "getsockopt",
     ),
+    # clone and clone3 with any flags, threads included: every thread counts against the
+    # user's process limit and takes one of the system's PIDs (32768 by default), so a child
+    # starting thousands would make every fork of the user fail (other workers' evaluations,
+    # the coordinator), and threads would spread one evaluation's CPU-time limit over every
+    # core. The worker's numerical libraries are single-threaded (its environment says so).
     "processes": (
-        "execve", "execveat", "fork", "vfork", "ptrace", "process_vm_readv",
+        "clone", "clone3", "execve", "execveat", "fork", "vfork", "ptrace", "process_vm_readv",
         "process_vm_writev", "process_madvise", "process_mrelease", "kcmp", "migrate_pages",
         "move_pages", "kill", "tkill", "tgkill", "rt_sigqueueinfo", "rt_tgsigqueueinfo",
         "pidfd_open", "pidfd_send_signal", "pidfd_getfd", "setpgid", "setsid",
@@ -149,21 +154,9 @@ DENIED: dict[str, tuple[str, ...]] = {
     ),
 }  # fmt: skip
 
-# Their arguments live in a struct the filter cannot read: ENOSYS makes glibc fall back to
-# openat (refused) and clone, whose arguments it checks.
-UNSUPPORTED = ("openat2", "clone3")
-
-CLONE_THREAD = 0x00010000
-CLONE_NAMESPACES = (
-    0x00000080  # CLONE_NEWTIME
-    | 0x00020000  # CLONE_NEWNS
-    | 0x02000000  # CLONE_NEWCGROUP
-    | 0x04000000  # CLONE_NEWUTS
-    | 0x08000000  # CLONE_NEWIPC
-    | 0x10000000  # CLONE_NEWUSER
-    | 0x20000000  # CLONE_NEWPID
-    | 0x40000000  # CLONE_NEWNET
-)
+# Its arguments live in a struct the filter cannot read: ENOSYS makes glibc fall back to
+# openat, which is refused.
+UNSUPPORTED = ("openat2",)
 
 DENIED_FCNTL_COMMANDS = (
     6,  # F_SETLK
