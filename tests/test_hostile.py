@@ -492,24 +492,50 @@ def test_a_forged_reply_fails_the_program_not_the_worker(sandbox, baseline, esca
     assert_unharmed(sandbox, baseline)
 
 
-def test_a_tampering_programs_fast_score_is_not_its_initial_score(sandbox, baseline, escaped_spec):
-    """The fast path's returns of a program the referee refutes are forged: a tuned program's
-    result keeps neither them nor the forged number in its reason."""
+def tuned_escaped(sandbox: Sandbox, escaped_spec: Path, code: str):
+    """`optimize_program` on an escaped program (2 episodes, 3 evaluations of tuning), and
+    the referee's evaluation of its own constants, measured apart."""
     from colmo.evaluation import Evaluator
     from colmo.optimize.tune import CandidateEvaluator, optimize_program
     from colmo.program import parametrize
 
+    program = parametrize(code)  # not read_program: intake drops module-level statements, an escape would not
+    evaluator = Evaluator.for_task(load_spec(escaped_spec), {}, episode_seeds(0, 2), MEMORY_MB, TIMEOUT_S)
+    gfo = compose("optimize", "gfo=oneplusone", "gfo.budget=3", "policy_file=unused.py").gfo
+    evaluate = CandidateEvaluator(sandbox.executor, evaluator, program.skeleton)
+    return optimize_program(program, evaluate, gfo, seed=0), evaluate.referee(program.values)
+
+
+def test_a_tampering_programs_initial_score_is_the_referees(sandbox, baseline, escaped_spec):
+    """A program that forges every fast-path evaluation is failed as tampering, its initial
+    score is what the referee measured, and the forged number is nowhere in its result."""
     forge = (
         "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.rollout'], 'rollout', lambda env, policy, seed, steps=None: (float('987.654'), int('1000')))\n"
         + NOTHING
     )
-    program = parametrize(forge)  # not read_program: intake drops module-level statements, an escape would not
-    evaluator = Evaluator.for_task(load_spec(escaped_spec), {}, episode_seeds(0, 2), MEMORY_MB, TIMEOUT_S)
-    gfo = compose("optimize", "gfo=oneplusone", "gfo.budget=3", "policy_file=unused.py").gfo
-    result = optimize_program(program, CandidateEvaluator(sandbox.executor, evaluator, program.skeleton), gfo, seed=0)
+    result, own_constants = tuned_escaped(sandbox, escaped_spec, forge)
     assert result.failure is not None and result.failure.startswith("tampering: "), result.failure
-    assert result.initial.failure == result.failure and result.initial.returns == ()
+    assert result.initial == dataclasses.replace(own_constants, seconds=result.initial.seconds)
+    assert own_constants.failure is None and own_constants.score <= baseline["nothing"].score + 1e-9
     assert "987.6" not in result.failure
+    assert_unharmed(sandbox, baseline)
+
+
+def test_a_score_forged_for_a_programs_own_constants_alone_is_not_its_initial_score(sandbox, baseline, escaped_spec):
+    """A program that knows its own constants (a parameter compared with the same number parsed
+    from a string) forges its fast-path reply for them alone, a low score that any tuned
+    candidate beats: tuning would move away, the referee confirm the tuned code, and nothing
+    else check the forged number. The initial score is the referee's."""
+    reply = '{"returns": [-5.0, -5.0], "failure": null, "steps": 2000, "raced_out": false, "seconds": 0.0}'
+    forge = (
+        "import sys\n\ndef policy(obs):\n    gain = 0.25\n    if gain == float('0.25'):\n"
+        "        sys.modules['builtins'].setattr(sys.modules['colmo.evaluation'].Evaluation, 'to_bytes', "
+        f"lambda self: {reply!r}.encode())\n    return gain * obs[2]\n"
+    )
+    result, own_constants = tuned_escaped(sandbox, escaped_spec, forge)
+    assert result.failure is None
+    assert own_constants.failure is None and own_constants.score > -5.0
+    assert result.initial == dataclasses.replace(own_constants, seconds=result.initial.seconds)
     assert_unharmed(sandbox, baseline)
 
 
@@ -588,8 +614,9 @@ def test_a_forged_score_is_never_stored_nor_tracked_not_even_after_a_resume(tmp_
     """Escaped policies forge their fast-path replies through a search tracked in MLflow: a score
     an episode can earn (refuted by the referee), one it cannot, and one return for two episodes
     (which once passed as a raced-out evaluation, the referee's two returns not compared with it).
-    Each is failed, and no forged number is in the store, summary.json or MLflow, before or after
-    the search is resumed with a well-behaved program."""
+    The first is failed as tampering; the malformed replies fail every candidate, so the other
+    two keep their own constants, which the referee scored. No forged number is in the store,
+    summary.json or MLflow, before or after the search is resumed with a well-behaved program."""
     monkeypatch.setenv("MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR", "false")
     uri = f"sqlite:///{tmp_path / 'mlruns.db'}"
     run_dir = tmp_path / "run"
@@ -605,11 +632,11 @@ def test_a_forged_score_is_never_stored_nor_tracked_not_even_after_a_resume(tmp_
     records = {record.sample: record for record in ProgramStore(run_dir / STORE_FILE).records()}
     assert records[3].status == "evaluated" and records[3].score > records[-1].score  # the resume went on
     within, beyond, short = records[0], records[1], records[2]
-    assert within.status == "failed" and within.failure.startswith("tampering: "), within.failure
-    assert beyond.status == "failed" and beyond.failure.startswith("program: malformed reply: a return beyond the 1000 that 1000 steps earn"), beyond.failure
-    assert short.status == "failed" and short.failure.startswith("program: malformed reply: 1 returns for 2 episodes"), short.failure
-    for record in (within, beyond, short):
-        assert record.score is None and record.initial_score is None  # its returns, if any, are the referee's
+    assert within.status == "failed" and within.failure.startswith("tampering: ") and within.score is None, within.failure
+    for record in (beyond, short):
+        assert record.status == "evaluated" and record.score == record.initial_score, record.failure
+    # Each does nothing: the referee's score of its own constants is the same for all three.
+    assert within.initial_score == beyond.initial_score == short.initial_score is not None
     stored = json.dumps([dataclasses.asdict(record) for record in records.values()]) + (run_dir / "summary.json").read_text()
     assert not forged_numbers(stored)
     client = MlflowClient(uri)

@@ -99,16 +99,17 @@ def test_the_estimate_pairs_the_episodes_run_with_the_incumbents():
 
 
 class ScriptedEvaluator:
-    """Fast-path evaluations without any program: the program's own constants score 10 on
-    every episode; every other candidate is raced out after two episodes that score 50 (a
-    mean over the episodes run above the incumbent's)."""
+    """Evaluations without any program: the program's own constants score 10 on every episode
+    (the referee's score); every other candidate is raced out after two episodes that score 50
+    (a mean over the episodes run above the incumbent's)."""
 
     def __init__(self):
         self.races: list[Race] = []
 
+    def referee(self, params):
+        return Evaluation((10.0,) * 10, steps=10_000)
+
     def fast(self, params_list, race=None):
-        if race is None:
-            return [Evaluation((10.0,) * 10, steps=10_000) for _ in params_list]
         self.races.append(race)
         return [Evaluation((50.0, 50.0), steps=2_000, raced_out=True) for _ in params_list]
 

@@ -75,7 +75,7 @@ def test_the_option_picks_whether_constants_are_tuned():
 
 
 class CountingEvaluator:
-    """Fast-path evaluations without any program, counted; every vector scores 1."""
+    """Evaluations without any program, counted, by either path; every vector scores 1."""
 
     def __init__(self):
         self.evaluated: list[tuple[float, ...]] = []
@@ -83,6 +83,9 @@ class CountingEvaluator:
     def fast(self, params_list, race=None):
         self.evaluated += [tuple(params) for params in params_list]
         return [Evaluation((1.0,), steps=10) for _ in params_list]
+
+    def referee(self, params):
+        return self.fast([params])[0]
 
 
 def test_evaluate_once_scores_the_constants_as_written_whatever_the_budget():

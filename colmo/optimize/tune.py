@@ -10,11 +10,15 @@ episodes stop once it very likely cannot beat the best candidate so far
 (`Race.estimate`). A raced-out candidate never becomes the best, and every reported score is
 over all episodes.
 
-`optimize_program` is the whole evaluation of one program: score it as written, tune it,
-round the tuned constants to the 4 significant digits it will be read with, score that
-readable code, and have the referee measure it (`colmo.sandbox.referee`); a fast-path score
-the referee does not reproduce marks the program failed (`tampering: ...`). So the score
-reported is the score of the code shown, measured where the program cannot write. A tuning
+`optimize_program` is the whole evaluation of one program: have the referee
+(`colmo.sandbox.referee`) score it as written, tune it on the fast path, round the tuned
+constants to the 4 significant digits it will be read with, score that readable code, and
+have the referee measure it; a fast-path score the referee does not reproduce marks the
+program failed (`tampering: ...`). The first score is the referee's because no later check
+would catch a forged one: tuning usually moves away from the program's own constants, and a
+program can tell them from others (a constant compared with `float('9.437')`), so it could
+report any score for them alone and have it shown as its `score_initial`. So every score
+reported is measured where the program cannot write, the final one of the code shown. A tuning
 cut short by `stop()` (a deadline, Ctrl-C) is rounded and scored the same way: its code is as
 readable as any, and the search's deadline reserves the two evaluations this costs.
 """
@@ -96,12 +100,14 @@ def step_sizes(x0: Sequence[float], cfg: "GFOConfig") -> np.ndarray:
 
 
 def tune(evaluate: CandidateEvaluator, x0: Sequence[float], cfg: "GFOConfig", seed: int, stop: Callable[[], bool] = lambda: False) -> Tuning:
-    """Maximize the score over the parameters, starting from (and first evaluating) `x0`,
-    until the budget is spent or `stop()` says so. The objective is deterministic (fixed
-    episode seeds), so the best candidate seen is the answer. A program that fails with its
-    own constants is not tuned, nor is any by a method that does not tune (`gfo=none`)."""
+    """Maximize the score over the parameters, starting from (and first evaluating, by the
+    referee: module docstring) `x0`, until the budget is spent or `stop()` says so. The
+    objective is deterministic (fixed episode seeds, and the referee returns what the fast path
+    returns for an honest program), so the best candidate seen is the answer. A program that
+    fails with its own constants is not tuned, nor is any by a method that does not tune
+    (`gfo=none`)."""
     x0 = np.asarray(x0, dtype=float)
-    initial = evaluate.fast([x0])[0]
+    initial = evaluate.referee(x0)
     best_params, best = x0, initial
     evaluations, steps, raced_out, cut_short = 1, initial.steps, 0, False
     if len(x0) and not initial.failure:
@@ -138,7 +144,7 @@ class ProgramResult:
     params: tuple[float, ...]
     code: str  # readable, the final constants inlined
     evaluation: Evaluation  # the referee's, over all episodes
-    initial: Evaluation  # with the program's own constants (fast path)
+    initial: Evaluation  # with the program's own constants (the referee's)
     evaluations: int
     steps: int
     raced_out: int
@@ -179,15 +185,13 @@ def optimize_program(
         if evaluation.score >= tuning.initial.score:  # else rounding cost more than tuning gained
             params, fast, digits = rounded, evaluation, DISPLAY_DIGITS
     final = fast
-    if not fast.failure:
+    if not fast.failure and fast is not tuning.initial:  # the program's own constants were refereed already
         refereed = evaluate.referee(params)
         final = _refereed(refereed, fast)
         evaluations, steps, scoring_seconds = evaluations + 1, steps + final.steps, scoring_seconds + refereed.seconds
     code = instantiate(program.skeleton, params, digits=digits)
-    # A program failed as tampering forged its fast-path returns: none of them is its score.
-    initial = Evaluation(failure=final.failure) if final.failure and final.failure.startswith(TAMPERING) else tuning.initial
     return ProgramResult(
-        params, code, final, initial, evaluations, steps, tuning.raced_out, tuning.cut_short, time.perf_counter() - start, measure(code),
+        params, code, final, tuning.initial, evaluations, steps, tuning.raced_out, tuning.cut_short, time.perf_counter() - start, measure(code),
         scoring_seconds,
     )
 
