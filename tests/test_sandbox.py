@@ -11,6 +11,7 @@ import json
 import math
 import os
 import pickle
+import threading
 import time
 
 import numpy as np
@@ -18,12 +19,12 @@ import pytest
 
 from colmo.environments.base import PolicyFailure
 from colmo.environments.pendulum import PendulumSwingup
-from colmo.evaluation import Evaluation
+from colmo.evaluation import REFEREE, EvalRequest, Evaluation
 from colmo.program import parametrize
 from colmo.rollout import as_action, evaluate_policy
 from colmo.sandbox import ForbiddenProgram, check_program
 from colmo.sandbox.namespace import Program, load_policy
-from colmo.sandbox.referee import RefereeTimeout, write_all
+from colmo.sandbox.referee import RefereeTimeout, frame, referee_evaluation, write_all
 
 IMPORTS = ("numpy", "math")
 
@@ -309,3 +310,99 @@ def test_a_write_the_reader_never_takes_ends_at_the_deadline():
     finally:
         os.close(read_fd)
         os.close(write_fd)
+
+
+# -- the referee's checks of what its child answers ----------------------------------------------
+
+def _scripted_child(read_fd: int, write_fd: int, answer) -> None:
+    """A referee child written from the wire format (colmo.sandbox.referee's docstring): for the
+    k-th `O` frame (the live episodes' indices), it writes `answer(k, live)`."""
+    def read_exactly(size: int) -> bytes:
+        data = b""
+        while len(data) < size:
+            chunk = os.read(read_fd, size - len(data))
+            if not chunk:
+                raise EOFError
+            data += chunk
+        return data
+
+    step = 0
+    try:
+        while True:
+            tag, length = bytes(read_exactly(1)), int.from_bytes(read_exactly(4), "little")
+            payload = read_exactly(length)
+            if tag == b"O":
+                count = int.from_bytes(payload[:4], "little")
+                os.write(write_fd, answer(step, np.frombuffer(payload, dtype="<u4", count=count, offset=4).tolist()))
+                step += 1
+            elif tag != b"S":
+                return
+    except EOFError:
+        return
+
+
+def _refereed(answer, episodes: int = 4, steps: int = 10) -> Evaluation:
+    """`referee_evaluation` of pendulum episodes against `_scripted_child(answer)` in a thread."""
+    envs = [PendulumSwingup() for _ in range(episodes)]
+    request = EvalRequest("pendulum", (), tuple(range(episodes)), "", (), (), steps=steps, mode=REFEREE)
+    observations_read, observations_write = os.pipe()
+    actions_read, actions_write = os.pipe()
+    child = threading.Thread(target=_scripted_child, args=(observations_read, actions_write, answer))
+    child.start()
+    try:
+        return referee_evaluation(envs, request, actions_read, observations_write, time.monotonic() + 60)
+    finally:
+        os.close(observations_write)
+        child.join()
+        for fd in (observations_read, actions_read, actions_write):
+            os.close(fd)
+
+
+def _zero_actions(live: list[int]) -> bytes:
+    return frame(b"A", np.zeros(len(live)).tobytes())
+
+
+def _zero_policy_returns(episodes: int, steps: int) -> tuple[float, ...]:
+    return evaluate_policy(PendulumSwingup(), lambda obs: 0.0, range(episodes), steps).returns
+
+
+def test_the_referee_runs_an_honest_childs_actions():
+    assert _refereed(lambda step, live: _zero_actions(live)) == Evaluation(_zero_policy_returns(4, 10), None, 40)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_a_non_finite_action_from_the_child_fails_its_episode_as_tampering(bad):
+    """Episode 2 gets a non-finite action at step 3: the evaluation fails with its reason, and
+    the episodes before it run to their end, as one after another."""
+    def answer(step, live):
+        if step != 3 or 2 not in live:
+            return _zero_actions(live)
+        actions = np.zeros(len(live))
+        actions[live.index(2)] = bad
+        return frame(b"A", actions.tobytes())
+
+    evaluation = _refereed(answer)
+    assert evaluation.failure == "tampering: the policy process sent a malformed action"
+    assert evaluation.returns == _zero_policy_returns(2, 10)
+
+
+def test_a_failure_the_child_reports_fails_its_episode_with_its_reason():
+    """The child reports episode 1's policy failing at step 5 and acts for the others: the
+    evaluation fails with that reason after episode 0's whole return."""
+    def answer(step, live):
+        if step != 5 or 1 not in live:
+            return _zero_actions(live)
+        return frame(b"F", (1).to_bytes(4, "little") + b"exception: ValueError: x (step 5)") + _zero_actions([i for i in live if i != 1])
+
+    evaluation = _refereed(answer)
+    assert (evaluation.returns, evaluation.failure) == (_zero_policy_returns(1, 10), "exception: ValueError: x (step 5)")
+
+
+@pytest.mark.parametrize("answer", [
+    lambda step, live: frame(b"F", (7).to_bytes(4, "little") + b"no such episode") + _zero_actions(live),
+    lambda step, live: frame(b"A", np.zeros(len(live) + 1).tobytes()),  # one action too many
+    lambda step, live: frame(b"X", np.zeros(len(live)).tobytes()),
+], ids=["failure of an episode not live", "too many actions", "unknown tag"])
+def test_a_malformed_answer_fails_the_evaluation_as_tampering(answer):
+    evaluation = _refereed(answer)
+    assert (evaluation.returns, evaluation.failure) == ((), "tampering: the policy process sent a malformed action")

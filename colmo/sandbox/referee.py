@@ -9,20 +9,24 @@ policy does anyway: the returns are computed here.
 The episodes of a request run in lockstep, in batches of up to `LOCKSTEP` episodes, each in
 its own copy of the environment, and the child holds one fresh program instance per episode
 (`Program.new_policy`), so one frame each way per control step serves a whole batch (a pipe
-round trip per step of the batch, not per step of each episode). Episodes are independent, so this returns what running them one after another
-returns: when episode k fails, the later ones are dropped and the earlier ones run on; the
-first failing episode in seed order fails the evaluation, and racing is decided on the returns
-in seed order.
+round trip per step of the batch, not per step of each episode). Episodes are independent, so
+this returns what running them one after another returns: when episode k fails, the later ones
+are dropped and the earlier ones run on; the first failing episode in seed order fails the
+evaluation, and racing is decided on the returns in seed order.
 
 Wire format, both ways: frames of a tag byte, a payload length (4 bytes, little endian) and
 the payload. Worker to child: `S` + a batch's first episode index (uint32) and its seeds
-(int64 each) at the batch's start, then per step `O` + the live episodes' indices (uint32
-each, ascending) and their observations (float64, one row each), and `Q` to quit. Child to worker, per `O`: an `F` frame (an episode index, uint32, and
-a failure reason, UTF-8) for each live episode whose policy failed, then `A` + the actions of
-the others, in order (float64, exactly `action_size` values each), all in one write. Every
-write of the worker is bounded by the request's deadline: a child that stops reading cannot
-block it. Its descriptors are non-blocking, so a step costs it one write and one read, and a
-wait (bounded by the deadline) only when the child has not answered yet.
+(int64 each) at the batch's start, then per step `O` + the number of live episodes (uint32),
+their indices (uint32 each, ascending) and their observations (float64, one row each), and
+`Q` to quit. Child to worker, per `O`: an `F` frame (an episode index, uint32, and a failure
+reason, UTF-8) for each live episode whose policy failed, then `A` + the actions of the
+others, in order (float64, exactly `action_size` values each), all in one write. Every write
+of the worker is bounded by the request's deadline: a child that stops reading cannot block
+it. Its descriptors are non-blocking, so a step costs it one write and one read, and a wait
+(bounded by the deadline) only when the child has not answered yet. What each side derives
+from the live episodes (the frame's header, the environments or instances to step) is kept
+until an episode fails, so a step costs little Python beyond the simulator and the policies:
+the lockstep's cost is the round trip itself, two process switches per control step.
 
 With `trace` set, a request runs one episode, which the worker also records as it steps it
 (`colmo.trace.TraceRecorder`) and returns in `Evaluation.trace`: the recording is as
@@ -101,7 +105,9 @@ class _Channel:
 
     def __init__(self, read_fd: int, write_fd: int, deadline: float = math.inf):
         self.read_fd, self.write_fd, self.deadline = read_fd, write_fd, deadline
-        self.buffer = bytearray()
+        # What was read and not yet returned: `pending[offset:]` (one read is one frame, the
+        # common case, returned without copying the stream into a buffer first).
+        self.pending, self.offset = b"", 0
         self.bounded = not math.isinf(deadline)
         if self.bounded:
             os.set_blocking(read_fd, False)
@@ -117,20 +123,21 @@ class _Channel:
             write_all(self.write_fd, frames)
 
     def receive(self) -> tuple[bytes, bytes]:
-        while len(self.buffer) < _HEADER.size:
-            self._fill()
-        tag, length = _HEADER.unpack_from(self.buffer)
-        if length > _MAX_FRAME:
-            raise ValueError(f"frame of {length} bytes")
-        end = _HEADER.size + length
-        while len(self.buffer) < end:
-            self._fill()
-        payload = bytes(self.buffer[_HEADER.size:end])
-        del self.buffer[:end]
-        return tag, payload
+        """The next frame's tag and payload; `EOFError` at the end of the stream."""
+        while True:
+            pending, offset = self.pending, self.offset
+            if len(pending) - offset >= _HEADER.size:
+                tag, length = _HEADER.unpack_from(pending, offset)
+                if length > _MAX_FRAME:
+                    raise ValueError(f"frame of {length} bytes")
+                start = offset + _HEADER.size
+                if start + length <= len(pending):
+                    self.offset = start + length
+                    return tag, pending[start:self.offset]
+            self.pending, self.offset = pending[offset:] + self._read(), 0
 
-    def _fill(self) -> None:
-        """Append what the pipe holds to the buffer, waiting (until the deadline) for it."""
+    def _read(self) -> bytes:
+        """What the pipe holds, waiting (until the deadline) for it."""
         while True:
             try:
                 chunk = os.read(self.read_fd, 65536)
@@ -141,7 +148,7 @@ class _Channel:
                     raise RefereeTimeout from None
         if not chunk:
             raise EOFError
-        self.buffer += chunk
+        return chunk
 
 
 def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd: int) -> None:
@@ -152,6 +159,8 @@ def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd:
     policies: dict[int, Callable[..., object]] = {}
     failures: list[tuple[int, str]] = []
     step = 0
+    framed: bytes | None = None  # the live episodes' indices as last sent ...
+    acting: list[tuple[int, Callable[..., object] | None]] = []  # ... and their (index, policy)
     while True:
         try:
             tag, payload = channel.receive()
@@ -159,7 +168,7 @@ def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd:
             return
         if tag == b"S":  # a batch of episodes starts: one fresh instance each
             (first,) = _COUNT.unpack_from(payload)
-            policies, failures, step = {}, [], 0
+            policies, failures, step, framed = {}, [], 0, None
             for index, seed in enumerate(np.frombuffer(payload, dtype="<i8", offset=_COUNT.size).tolist(), start=first):
                 try:
                     if program is None:
@@ -171,12 +180,15 @@ def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd:
         if tag != b"O":
             return
         (count,) = _COUNT.unpack_from(payload)
-        live = np.frombuffer(payload, dtype="<u4", count=count, offset=_COUNT.size).tolist()
-        observations = np.frombuffer(payload, dtype=np.float64, offset=_COUNT.size + 4 * count).reshape(count, -1)
+        header = _COUNT.size + 4 * count
+        if payload[_COUNT.size:header] != framed:  # the first step, or the worker dropped episodes
+            framed = payload[_COUNT.size:header]
+            # An episode without an instance failed at its load, or at an earlier step: reported.
+            acting = [(index, policies.get(index)) for index in np.frombuffer(framed, dtype="<u4").tolist()]
+        observations = np.frombuffer(payload, dtype=np.float64, offset=header).reshape(count, -1)
         actions = []
-        for index, obs in zip(live, observations):
-            policy = policies.get(index)
-            if policy is None:  # failed at its instance's load, reported below
+        for (index, policy), obs in zip(acting, observations):
+            if policy is None:
                 continue
             try:
                 actions.append(act(policy, obs.copy(), action_size, step).tobytes())
@@ -184,11 +196,14 @@ def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd:
                 failures.append((index, failure_reason(str(failure))))
             except BaseException as error:  # SystemExit and friends raised by the policy
                 failures.append((index, describe_exception(error, f" (step {step})")))
-        reports = b"".join(frame(b"F", _COUNT.pack(index) + reason.encode()) for index, reason in failures)
-        for index, _ in failures:
-            policies.pop(index, None)
-        failures = []
-        channel.send(reports + frame(b"A", b"".join(actions)))  # one write per step
+        reports = b""
+        if failures:
+            reports = b"".join(frame(b"F", _COUNT.pack(index) + reason.encode()) for index, reason in failures)
+            for index, _ in failures:
+                policies.pop(index, None)
+            failures, framed = [], None
+        body = b"".join(actions)
+        channel.send(reports + _HEADER.pack(b"A", len(body)) + body)  # one write per step
         step += 1
 
 
@@ -256,35 +271,41 @@ def _run_batch(channel: _Channel, envs: Sequence[Environment], request: EvalRequ
     first = episodes.live[0]
     seeds = [request.seeds[index] for index in episodes.live]
     channel.send(frame(b"S", _COUNT.pack(first) + np.asarray(seeds, dtype="<i8").tobytes()))
-    env_of = {index: envs[index % len(envs)] for index in episodes.live}
     initial = []
     for index, seed in zip(episodes.live, seeds):
         np.random.seed(seed % 2**32)  # as rollout does, for any environment that draws from it
-        initial.append(env_of[index].reset(seed))
+        initial.append(envs[index % len(envs)].reset(seed))
     observations = np.array(initial, dtype=np.float64)  # row k: episode first + k, sent as it is
     if recorder is not None:
         recorder.start(observations[0])
     action_size = envs[0].action_size
+    totals = episodes.totals
     simulated = 0
     framed: list[int] | None = None
     for _ in range(request.steps or envs[0].horizon):
-        if not episodes.live:
-            break
         live = episodes.live
+        if not live:
+            break
         if live is not framed:  # the first step, or a failure changed the live episodes
             framed, rows = live, [index - first for index in live]
-            header = _COUNT.pack(len(live)) + np.asarray(live, dtype="<u4").tobytes()
+            payload_size = _COUNT.size + 4 * len(live) + observations.itemsize * observations.shape[1] * len(live)
+            header = _HEADER.pack(b"O", payload_size) + _COUNT.pack(len(live)) + np.asarray(live, dtype="<u4").tobytes()
+            stepping = [(index, index - first, envs[index % len(envs)]) for index in live]
         sent = observations if len(rows) == len(observations) else observations[rows]
-        channel.send(frame(b"O", header + sent.tobytes()))
-        for index, action in _actions(channel, live, action_size, episodes):
-            if index not in episodes.live:  # a failure reported for an earlier episode dropped it
-                continue
-            reward, obs = env_of[index].step(action)
+        channel.send(header + sent.tobytes())
+        acting, actions = _actions(channel, live, action_size, episodes)
+        if episodes.live is live:  # no episode failed at this step: all of them act
+            acted = stepping
+        else:  # only the acting episodes that are still live (a failure drops the later ones)
+            kept = [k for k, index in enumerate(acting) if index in episodes.live]
+            acted, actions = [(acting[k], acting[k] - first, envs[acting[k] % len(envs)]) for k in kept], actions[kept]
+        for (index, row, env), action in zip(acted, actions):
+            reward, obs = env.step(action)
             if recorder is not None:
                 recorder.step(action, reward, obs)
-            observations[index - first] = obs
-            episodes.totals[index] += reward
-            simulated += 1
+            observations[row] = obs
+            totals[index] += reward
+        simulated += len(acted)
     for index in episodes.live:
         try:
             envs[index % len(envs)].check_episode()
@@ -293,10 +314,11 @@ def _run_batch(channel: _Channel, envs: Sequence[Environment], request: EvalRequ
     return simulated
 
 
-def _actions(channel: _Channel, live: list[int], action_size: int, episodes: _Episodes) -> list[tuple[int, np.ndarray]]:
+def _actions(channel: _Channel, live: list[int], action_size: int, episodes: _Episodes) -> tuple[list[int], np.ndarray]:
     """The child's actions for the `live` episodes, checked here (they come from untrusted
-    code), as `(episode, action)` pairs; the failures it reports, and malformed answers, go to
-    `episodes`."""
+    code): the episodes that act and their actions, one row each. The failures the child
+    reports, and malformed answers, go to `episodes` (so `episodes.live` is `live` still
+    only when no episode failed)."""
     failed = set()
     while True:
         tag, payload = channel.receive()
@@ -305,17 +327,20 @@ def _actions(channel: _Channel, live: list[int], action_size: int, episodes: _Ep
         (index,) = _COUNT.unpack_from(payload) if len(payload) >= _COUNT.size else (-1,)
         if index not in live or index in failed:
             episodes.fail(live[0], "tampering: the policy process sent a malformed action")
-            return []
+            return [], np.empty((0, action_size))
         failed.add(index)
         episodes.fail(index, failure_reason(payload[_COUNT.size:].decode("utf-8", errors="replace")))
-    acting = [index for index in live if index not in failed]
+    acting = [index for index in live if index not in failed] if failed else live
     if tag != b"A" or len(payload) != 8 * action_size * len(acting):
         episodes.fail(live[0], "tampering: the policy process sent a malformed action")
-        return []
+        return [], np.empty((0, action_size))
     # A copy: the environment gets writable actions, as in the fast path.
     actions = np.frombuffer(payload, dtype=np.float64).reshape(len(acting), action_size).copy()
-    if not np.isfinite(actions).all():  # one check for the common case, then which episodes
+    # A finite sum means finite values (a NaN or an infinity makes it NaN or infinite); finite
+    # values whose sum overflows go to the exact check, which finds no culprit. Summed as Python
+    # floats: for a few values, cheaper than numpy's per-call cost.
+    if not math.isfinite(sum(actions.ravel().tolist())):
         for index, finite in zip(acting, np.isfinite(actions).all(axis=1).tolist()):
             if not finite:
                 episodes.fail(index, "tampering: the policy process sent a malformed action")
-    return list(zip(acting, actions))
+    return acting, actions
