@@ -100,7 +100,9 @@ class Evaluation:
         and with `request` it must fit it: one return per seed (fewer only for a failure, or
         racing where the request races), at most `horizon` (else `_MAX_EPISODE_STEPS`) control
         steps per seed, or the probe's `steps`, and each return within what that many steps
-        earn at `max_abs_reward` a step, if the task knows it (else `_MAX_ABS_RETURN`).
+        earn at `max_abs_reward` a step, if the task knows it (else `_MAX_ABS_RETURN`), and a
+        trace only where the request asked the referee for one. A failure reason is bounded,
+        and one that claims to be an executor's (`EXECUTOR_REASONS`) is marked `program: ...`.
         `ValueError` (saying what is wrong) if it is not a well-formed evaluation."""
         try:
             reply = json.loads(data)
@@ -120,6 +122,8 @@ class Evaluation:
         if any(abs(r) > _MAX_ABS_RETURN for r in returns):
             raise ValueError(f"a return beyond {_MAX_ABS_RETURN:g}")
         if request is not None:
+            if trace is not None and not (request.trace and request.mode == REFEREE):
+                raise ValueError("a trace that was not asked for")  # only the worker records one
             episodes = len(request.seeds)
             if len(returns) > episodes or (len(returns) < episodes and failure is None and not (raced_out and request.race is not None)):
                 raise ValueError(f"{len(returns)} returns for {episodes} episodes")
@@ -132,6 +136,8 @@ class Evaluation:
                 bound = episode_steps * max_abs_reward * (1 + 1e-9)  # a sum of that many rewards, rounded
                 if any(abs(r) > bound for r in returns):
                     raise ValueError(f"a return beyond the {bound:.6g} that {episode_steps} steps earn")
+        if failure and failure.startswith(EXECUTOR_REASONS):  # the program's text, not the executor's
+            failure = f"program: {failure}"
         return cls(tuple(returns), failure_reason(failure) if failure else None, steps, raced_out, seconds, trace)
 
 
@@ -141,6 +147,9 @@ class ExecutorClosed(RuntimeError):
 
 # The failure of a request that a closing executor cancelled before it ran.
 CANCELLED = "cancelled: the executor was closed"
+# How the reasons an executor gives in the coordinator's own process begin (never a sandbox's:
+# a cancellation stops the search's finish), so a reply claiming one is marked as the program's.
+EXECUTOR_REASONS = ("cancelled:", "lost worker:")
 
 
 class WorkerLost(Exception):

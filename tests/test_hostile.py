@@ -31,7 +31,7 @@ import pytest
 from conftest import children_of, compose, last_json_line, same_outcome, wait_for
 from mlflow import MlflowClient
 
-from colmo.evaluation import FAST, REFEREE, EvalRequest, Evaluation
+from colmo.evaluation import CANCELLED, FAST, REFEREE, EvalRequest, Evaluation
 from colmo.executor import LocalExecutor
 from colmo.generate import Generation, Generator
 from colmo.generate.mutate import MutateGenerator
@@ -477,6 +477,7 @@ FORGED_REPLIES = {
     # A pendulum episode is 1000 steps of a reward in [0, 1].
     "more steps than the horizon": '{"returns": [1.0], "failure": null, "steps": 1001, "raced_out": false, "seconds": 0.0}',
     "more than the horizon's rewards": '{"returns": [1000.5], "failure": null, "steps": 1000, "raced_out": false, "seconds": 0.0}',
+    "a trace that was not asked for": '{"returns": [1.0], "failure": null, "steps": 1000, "raced_out": false, "seconds": 0.0, "trace": {"x": [0]}}',
 }
 
 
@@ -504,6 +505,28 @@ def tuned_escaped(sandbox: Sandbox, escaped_spec: Path, code: str):
     gfo = compose("optimize", "gfo=oneplusone", "gfo.budget=3", "policy_file=unused.py").gfo
     evaluate = CandidateEvaluator(sandbox.executor, evaluator, program.skeleton)
     return optimize_program(program, evaluate, gfo, seed=0), evaluate.referee(program.values)
+
+
+# A failure that claims to be the executor's cancellation (which stops a search's finish: the
+# held-out scores of the other best programs, the simplification, the video), in either mode.
+CLAIMS_CANCELLED = {
+    "fast": (
+        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.evaluation'].Evaluation, 'to_bytes', lambda self: "
+        + repr('{"returns": [], "failure": "%s", "steps": 0, "raced_out": false, "seconds": 0.0}' % CANCELLED) + ".encode())\n" + NOTHING
+    ),
+    "referee": (  # its failure report for episode 0, and no actions, written before it is asked
+        f"import os\ntext = {CANCELLED.encode()!r}\nfor fd in range(3, 64):\n    try:\n"
+        "        os.write(fd, b'F' + (4 + len(text)).to_bytes(4, 'little') + bytes(4) + text + b'A' + bytes(4))\n"
+        "    except OSError:\n        pass\n" + NOTHING
+    ),
+}
+
+
+@pytest.mark.parametrize("mode", CLAIMS_CANCELLED)
+def test_a_failure_claiming_the_executors_cancellation_is_marked_as_the_programs(sandbox, baseline, escaped_spec, mode):
+    evaluation = sandbox.evaluate(CLAIMS_CANCELLED[mode], spec=escaped_spec, imports=("numpy", "math", "os", "sys", "ctypes", "socket"), mode=mode)
+    assert evaluation.failure == f"program: {CANCELLED}"
+    assert_unharmed(sandbox, baseline)
 
 
 def test_a_tampering_programs_initial_score_is_the_referees(sandbox, baseline, escaped_spec):
