@@ -54,6 +54,7 @@ class EvalRequest:
     memory_mb: int = 4096  # address-space limit of the process running the policy
     race: Optional[Race] = None
     trace: bool = False  # referee mode: also record the episode (`colmo.trace.EpisodeTrace`)
+    label: str = ""  # what is evaluated, for the executor's messages ("sample 12"); workers ignore it
 
 
 @dataclass(frozen=True)

@@ -2,6 +2,7 @@
 on a fresh worker, and the search around it goes on with every program present once."""
 
 import concurrent.futures
+import dataclasses
 import os
 import signal
 import threading
@@ -41,7 +42,7 @@ def test_a_killed_worker_costs_no_evaluation():
 
 
 def test_a_request_that_keeps_losing_its_worker_fails_with_the_reason():
-    request = paper_request(episodes=40)
+    request = dataclasses.replace(paper_request(episodes=40), label="sample 7")
     with LocalExecutor(1, memory_mb=1024, max_retries=1) as executor, concurrent.futures.ThreadPoolExecutor(1) as threads:
         executor.evaluate([paper_request(episodes=1)])  # a worker is up
         future = threads.submit(executor.evaluate, [request])
@@ -50,7 +51,7 @@ def test_a_request_that_keeps_losing_its_worker_fails_with_the_reason():
         kill_worker_mid_evaluation(executor)
         [result] = future.result()
     assert result.failure.startswith("lost worker: the worker was killed (SIGKILL)") and result.failure.endswith("after 1 retries")
-    assert "; it held program " in result.failure  # which program held the lost worker
+    assert "; it held sample 7, " in result.failure  # which program held the lost worker
 
 
 def test_search_survives_workers_killed_at_random_moments(tmp_path):

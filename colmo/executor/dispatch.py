@@ -6,7 +6,8 @@ Each slot's thread opens its worker (again after a loss), takes the next request
 is free, so work goes to whichever slot is idle, and adds the time it spent to the busy total.
 A request whose worker is lost (its process killed, its node gone) goes back to the queue, at
 most `max_retries` times, and the slot opens a fresh worker before it takes more work; after
-that the request is recorded as a failed `Evaluation` (`lost worker: ...`). A slot whose
+that the request is recorded as a failed `Evaluation` (`lost worker: ...; it held sample 12`,
+the request's `label`, or a hash of its program without one). A slot whose
 worker cannot start keeps trying with backoff without holding a request; after
 `_OPEN_FAILURES_BEFORE_FAILING` failures in a row it takes a request and, if its worker still
 cannot start, fails it with the reason, so a broken installation ends in failures, not a hang.
@@ -163,8 +164,8 @@ class Dispatcher(abc.ABC):
                 log.warning("a worker was lost (%s); retrying its request (retry %d of %d)", reason, job.retries, self.max_retries)
                 self._jobs.put(job)  # before this job's task_done, so that close() waits for the retry
             else:
-                program = hashlib.sha256(job.request.skeleton.encode()).hexdigest()[:12]
-                self._settle(job, Evaluation(failure=f"lost worker: {reason}; it held program {program}, after {job.retries} retries"))
+                held = job.request.label or f"program {hashlib.sha256(job.request.skeleton.encode()).hexdigest()[:12]}"
+                self._settle(job, Evaluation(failure=f"lost worker: {reason}; it held {held}, after {job.retries} retries"))
 
     @staticmethod
     def _settle(job: _Job, evaluation: Evaluation) -> None:

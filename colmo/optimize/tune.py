@@ -50,13 +50,15 @@ TAMPERING = "tampering:"  # how the failure of a program whose fast path the ref
 
 class CandidateEvaluator:
     """Evaluations of one program's parameter vectors on a task: fast (GFO candidates, raced
-    and split over `episode_chunks` requests when asked) or by the referee (final scores)."""
+    and split over `episode_chunks` requests when asked) or by the referee (final scores);
+    `label` names the program in the executor's messages (a lost worker says what it held)."""
 
-    def __init__(self, executor: Executor, evaluator: Evaluator, skeleton: str, episode_chunks: int = 1):
+    def __init__(self, executor: Executor, evaluator: Evaluator, skeleton: str, episode_chunks: int = 1, label: str = ""):
         self.executor = executor
         self.evaluator = evaluator
         self.skeleton = skeleton
         self.chunks = evaluator.seed_chunks(episode_chunks)
+        self.label = label
 
     def fast(self, params_list: Sequence[Sequence[float]], race: Optional[Race] = None) -> list[Evaluation]:
         """Each vector's fast-path evaluation. With `race` (its `incumbent` over all seeds) the
@@ -64,7 +66,7 @@ class CandidateEvaluator:
         the result does not depend on how many workers there are; without, they are split."""
         chunks = self.evaluator.seed_chunks(1) if race else self.chunks
         requests = [
-            self.evaluator.request(self.skeleton, params, seeds=chunk, mode=FAST, race=race)
+            self.evaluator.request(self.skeleton, params, seeds=chunk, mode=FAST, race=race, label=self.label)
             for params in params_list
             for chunk in chunks
         ]
@@ -75,7 +77,7 @@ class CandidateEvaluator:
         """The referee's evaluation of one vector over all the seeds (split over
         `episode_chunks` requests), each request limited to `timeout_s` if given."""
         requests = [
-            self.evaluator.request(self.skeleton, params, seeds=chunk, mode=REFEREE, timeout_s=timeout_s)
+            self.evaluator.request(self.skeleton, params, seeds=chunk, mode=REFEREE, timeout_s=timeout_s, label=self.label)
             for chunk in self.chunks
         ]
         return Evaluation.joined(self.executor.evaluate(requests))
