@@ -9,7 +9,8 @@ one line on stderr (`colmo: error: ...`) and exit code 2 whatever Hydra flag is 
 during the run ends in one line and exit code 2 or 1 (a `RunError` from `check`, such as no
 language-model server answering, too). `hydra.verbose=true` shows the traceback instead. Shell
 completion (`-sc install=bash`, `-sc query=bash`) is Hydra's, without the schema entries and, on
-each Tab, without importing the plugins it does not need (`_shell_completion`).
+each Tab, without importing the plugins it does not need (`_shell_completion`). Every file
+and directory an app creates is private (umask 077: 0600 and 0700).
 `--help` is colmo's own: every config group with its options, each described by the comment
 heading its YAML file (schema entries hidden, the chosen ones marked), then every documented
 field of the config that the other arguments compose, with its value there and its
@@ -204,6 +205,10 @@ def hydra_app(
                             check(cfg)
                 except Exception as error:  # one line: a composition error is the user's (exit 2), a RunError not (1)
                     _fail(error, verbose=_verbose(overrides))
+            # Whatever the run writes is private, in a directory the user made too: programs'
+            # code and failure messages (a program chooses its own), logs, the tracking store,
+            # videos, also those that Hydra, MLflow, SQLite and ffmpeg create.
+            os.umask(0o077)
             try:
                 if args.shell_completion:
                     _shell_completion(hydra_main, list(args.overrides))

@@ -1,11 +1,14 @@
 """The run directory's files are private (issue 24 part 7): the store holds programs' failure
 messages and the run's settings, so `programs.db` and SQLite's -wal and -shm files beside it
-are created 0600 and a run directory colmo creates is 0700, whatever the umask lets through."""
+are created 0600 and a run directory colmo creates is 0700, whatever the umask lets through;
+through a colmo app, every file and directory a run writes is."""
 
 from __future__ import annotations
 
 import os
 import stat
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -61,3 +64,24 @@ def test_a_store_in_a_directory_the_user_made_is_private(tmp_path, permissive_um
     run_dir.mkdir(mode=0o755)
     write_a_sample(run_dir, resume=False, sample=0)
     assert mode(run_dir) == 0o755  # the user's own directory keeps the mode the user gave it
+
+
+def test_every_file_a_run_writes_is_private_even_in_a_directory_the_user_made(tmp_path):
+    """Through a colmo app (colmo-optimize, a failing policy: seconds), under the most permissive
+    umask, in a run directory the user made open to all: its log, its config copies, the result
+    and the policy it writes, and the directories under it, are private."""
+    run_dir = tmp_path / "mine"
+    run_dir.mkdir()
+    run_dir.chmod(0o777)
+    policy = tmp_path / "policy.py"
+    policy.write_text("def policy(obs):\n    return obs[0] / 0.0\n")
+    overrides = (f"policy_file={policy}", "gfo=none", "task.episodes=1", "executor.workers=1", f"hydra.run.dir={run_dir}")
+    result = subprocess.run(
+        [sys.executable, "-m", "colmo.optimize", *overrides], cwd=tmp_path, capture_output=True, text=True, timeout=300,
+        preexec_fn=lambda: os.umask(0),
+    )  # fmt: skip
+    assert result.returncode == 1, result.stderr  # the policy failed, and the run wrote its files
+    written = {str(path.relative_to(run_dir)): mode(path) for path in run_dir.rglob("*")}
+    assert {"colmo.log", "result.json", "tuned_policy.py", ".hydra"} <= written.keys()
+    assert written == {name: 0o700 if (run_dir / name).is_dir() else 0o600 for name in written}
+    assert mode(run_dir) == 0o777  # the user's own directory keeps the mode the user gave it
