@@ -229,7 +229,7 @@ HOSTILE = {
     "array ctypes": (policy_doing("obs.ctypes.shape"), "forbidden: .ctypes"),
     # Raw memory: object arrays over buffers, in every form, and freeing a buffer under a view.
     "object array over a buffer": (policy_doing("a = np.ndarray(shape=(4,), dtype='O', buffer=bytearray(32))"), "forbidden: .ndarray"),
-    "structured object dtype": (policy_doing("a = np.frombuffer(bytes(8), dtype=[('a', 'O')])"), "forbidden: object dtype 'O'"),
+    "structured object dtype": (policy_doing("a = np.empty(1, dtype=[('a', 'O')])"), "forbidden: object dtype 'O'"),
     "subarray object dtype": (policy_doing("a = np.zeros(1, dtype=('O', (1,)))"), "forbidden: object dtype 'O'"),
     "buffer keyword": (policy_doing("a = np.zeros(1).view()\n    b = np.asarray(a, like=a)\n    c = np.recarray((1,), buf=a, formats='f8')"), "forbidden: .recarray"),
     "resize under a view": (policy_doing("a = np.zeros(10 ** 6)\n    v = a[:]\n    a.resize(1, refcheck=False)\n    v[:] = 1"), "forbidden: .resize"),

@@ -136,7 +136,7 @@ def test_ordinary_policies_pass(code):
     ("import numpy as __builtins__", "forbidden: __builtins__"),
     # Raw memory: object arrays over buffers hand a program fake objects, hence the real builtins.
     ("np.ndarray(shape=(1,), dtype='O', buffer=bytearray(8))", "forbidden: .ndarray"),
-    ("np.frombuffer(b, 'float64')\nx = np.zeros(2, buffer=b)", "forbidden: keyword buffer="),
+    ("x = np.zeros(2, buffer=b)", "forbidden: keyword buffer="),
     ("a = np.zeros(2, dtype='O')", "forbidden: object dtype 'O'"),
     ("a = np.zeros(2, dtype='|O8')", "forbidden: object dtype '|O8'"),
     ("a = np.empty(1, dtype=[('a', 'O')])", "forbidden: object dtype 'O'"),
