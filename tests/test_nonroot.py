@@ -98,7 +98,15 @@ CONFINED_CHILD = ENTER_MODE + textwrap.dedent(
     with open(netrc, "w") as file:
         file.write("machine example.com password %(password)s")
     os.chmod(netrc, 0o600)
+    try:  # where the file system keeps them: data a file holds besides its contents
+        os.setxattr(netrc, "user.xdg.origin.url", b"https://example.com/?token=%(password)s")
+    except OSError:
+        pass
     coordinator = os.getpid()
+
+    def where_it_works():
+        os.chdir(f"/proc/{coordinator}/cwd")
+        return os.getcwd()
 
     def outcome(action):
         try:
@@ -136,6 +144,12 @@ CONFINED_CHILD = ENTER_MODE + textwrap.dedent(
             report = {
                 "layers": list(confinement.layers),
                 "netrc": outcome(lambda: read(netrc)),
+                "netrc's extended attributes": outcome(lambda: os.listxattr(netrc) + [os.getxattr(netrc, "user.xdg.origin.url")]),
+                # The names of the coordinator's open files and of where it works (so of any
+                # dumpable process of the same uid: the user's editor, shells).
+                "coordinator cwd name": outcome(lambda: os.readlink(f"/proc/{coordinator}/cwd")),
+                "coordinator fd name": outcome(lambda: os.readlink(f"/proc/{coordinator}/fd/{read_fd}")),
+                "coordinator cwd by chdir": outcome(where_it_works),
                 "coordinator environ": outcome(lambda: read(f"/proc/{coordinator}/environ")),
                 "coordinator mem": outcome(lambda: read(f"/proc/{coordinator}/mem")),
                 "coordinator fd": outcome(lambda: read(f"/proc/{coordinator}/fd/{read_fd}")),

@@ -21,7 +21,7 @@ SIGKILL: it may ignore other signals.
 
 What the child can still do, by design: read what it already holds open (nothing else: the
 filter refuses every open, read-only included, so whatever it needs must be imported or opened
-in the zygote before the fork); see file names and metadata (stat, getdents); use the CPU and
+in the zygote before the fork); see the metadata of a path it names (stat, access); use the CPU and
 memory its rlimits allow, on one thread (the filter refuses threads); write to the descriptors
 it kept. Other processes running as the unprivileged uid (nobody, by default) share it with
 the child: pass a uid nothing else uses where that matters.

@@ -18,7 +18,11 @@ thread gets it (threads and children inherit it, and it cannot be removed):
   - the file system, reads included: `open` and `openat` with any flags (the child runs on
     what the zygote opened and imported before the fork, so a program that reached the real
     `open` reads neither ~/.netrc nor /proc/<pid>/environ, mem or fd of a same-uid process),
-    `posix_fadvise`, `cachestat`, `io_setup`; and writes: `creat`, `sync`, `syncfs`,
+    `posix_fadvise`, `cachestat`, `io_setup`; extended attributes, `getxattr`, `lgetxattr`,
+    `fgetxattr`, `getxattrat`, `listxattr`, `llistxattr`, `flistxattr`, `listxattrat` (data a
+    file holds besides its contents); the names behind links and working directories,
+    `readlink`, `readlinkat`, `chdir`, `fchdir` (/proc/<pid>/fd/N and cwd of every dumpable
+    process of the same uid name its open files and where it works); and writes: `creat`, `sync`, `syncfs`,
     `truncate`, `ftruncate`, `fallocate`, `rename`, `renameat`, `renameat2`, `unlink`,
     `unlinkat`, `rmdir`, `mkdir`, `mkdirat`, `link`, `linkat`, `symlink`, `symlinkat`,
     `mknod`, `mknodat`, `chmod`, `fchmod`, `fchmodat`, `fchmodat2`, `chown`, `fchown`,
@@ -78,8 +82,8 @@ on itself, sched_yield, sched_getaffinity, rseq, exit, exit_group; what it creat
 these is bounded by the descriptor and pending-signal limits `colmo.sandbox.confine` sets);
 no threads: a numerical library that starts a thread pool in the child fails (OpenBLAS
 calls exit(), which then hangs until the deadline), so the worker runs with one thread per
-library (`OPENBLAS_NUM_THREADS=1`, ... in its environment); stat, getdents, readlink, access (names and
-metadata, no contents); mmap/mprotect with PROT_EXEC: a program that reaches native code can
+library (`OPENBLAS_NUM_THREADS=1`, ... in its environment); stat, statx, access (the
+metadata of a path it names, no contents, no names it did not know); mmap/mprotect with PROT_EXEC: a program that reaches native code can
 already call any libc function, so shellcode would gain nothing, and refusing executable
 memory breaks libffi closures and loaders; `landlock_*` (it can only restrict).
 """

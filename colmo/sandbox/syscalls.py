@@ -19,7 +19,8 @@ COMMON_NEW_SYSCALLS = {
     "fsconfig": 431, "fsmount": 432, "fspick": 433, "pidfd_open": 434, "clone3": 435,
     "openat2": 437, "pidfd_getfd": 438, "process_madvise": 440, "mount_setattr": 442,
     "quotactl_fd": 443, "memfd_secret": 447, "process_mrelease": 448, "fchmodat2": 452,
-    "lsm_set_self_attr": 460, "setxattrat": 463, "removexattrat": 466, "open_tree_attr": 467,
+    "lsm_set_self_attr": 460, "setxattrat": 463, "getxattrat": 464, "listxattrat": 465,
+    "removexattrat": 466, "open_tree_attr": 467,
     "cachestat": 451, "file_setattr": 469,
 }  # fmt: skip
 
@@ -59,11 +60,15 @@ SYSCALL_NUMBERS: dict[str, dict[str, int]] = {
         "process_vm_readv": 310, "process_vm_writev": 311, "kcmp": 312, "finit_module": 313,
         "sched_setattr": 314, "renameat2": 316, "seccomp": 317, "memfd_create": 319,
         "kexec_file_load": 320, "bpf": 321, "execveat": 322, "userfaultfd": 323,
-        "sync": 162, "syncfs": 306, "fadvise64": 221, "io_setup": 206,
+        "sync": 162, "syncfs": 306, "fadvise64": 221, "io_setup": 206, "chdir": 80, "fchdir": 81,
+        "readlink": 89, "readlinkat": 267, "getxattr": 191, "lgetxattr": 192, "fgetxattr": 193,
+        "listxattr": 194, "llistxattr": 195, "flistxattr": 196,
         **COMMON_NEW_SYSCALLS,
     },
     "aarch64": {
-        "io_setup": 0, "sync": 81, "syncfs": 267, "fadvise64": 223,
+        "io_setup": 0, "sync": 81, "syncfs": 267, "fadvise64": 223, "chdir": 49, "fchdir": 50,
+        "readlinkat": 78, "getxattr": 8, "lgetxattr": 9, "fgetxattr": 10, "listxattr": 11,
+        "llistxattr": 12, "flistxattr": 13,
         "setxattr": 5, "lsetxattr": 6, "fsetxattr": 7, "removexattr": 14, "lremovexattr": 15,
         "fremovexattr": 16, "fcntl": 25, "inotify_init1": 26, "ioctl": 29, "ioprio_set": 30,
         "flock": 32, "mknodat": 33, "mkdirat": 34, "unlinkat": 35, "symlinkat": 36,
@@ -110,7 +115,16 @@ DENIED: dict[str, tuple[str, ...]] = {
     # A confined child needs no file system after the fork: every file it reads was opened
     # (or imported) in the zygote before it, so opening anything, read-only included, is
     # refused (a program with the real `open` cannot read ~/.netrc nor /proc/<pid>/environ).
-    "file system reads": ("open", "openat", "fadvise64", "cachestat", "io_setup"),
+    # Nor what a file holds besides its contents (extended attributes: a browser keeps the
+    # address a download came from in user.xdg.origin.url), nor the names behind links and
+    # working directories: /proc/<pid>/fd/N, cwd and exe of every process of the same uid
+    # that is dumpable (the coordinator, the user's editor and shells) name the files it has
+    # open and where it works; chdir there and getcwd would too.
+    "file system reads": (
+        "open", "openat", "fadvise64", "cachestat", "io_setup", "getxattr", "lgetxattr",
+        "fgetxattr", "getxattrat", "listxattr", "llistxattr", "flistxattr", "listxattrat",
+        "readlink", "readlinkat", "chdir", "fchdir",
+    ),
     "networking": (
         "socket", "socketpair", "connect", "bind", "listen", "accept", "accept4", "sendto",
         "sendmsg", "sendmmsg", "recvfrom", "recvmsg", "recvmmsg", "shutdown", "getsockname",
