@@ -43,6 +43,7 @@ import pytest
 
 from colmo.sandbox import seccomp, syscalls
 from colmo.sandbox.confine import (
+    LAYER_NO_CAPABILITIES,
     LAYER_NO_DUMP,
     LAYER_NO_NEW_PRIVS,
     LAYER_PARENT_DEATH_SIGNAL,
@@ -768,6 +769,28 @@ def test_a_mujoco_warning_cannot_write_its_log_file(world_writable_dir: Path) ->
 def test_the_inherited_reply_pipe_takes_a_large_reply() -> None:
     report = run_in_child(confined(lambda: {"payload": "x" * 3_000_000}))  # >> a pipe's buffer
     assert report["payload"] == "x" * 3_000_000
+
+
+@needs_seccomp
+def test_the_capabilities_of_a_user_namespace_of_its_own_are_dropped() -> None:
+    """A worker without root that made a user namespace of its own (as the sandbox worker does
+    where the kernel lets it) holds every capability in it; its confined child holds none."""
+
+    def body(reply_fd: int) -> dict:
+        if os.geteuid() == 0:
+            drop_to_nobody()  # an ordinary user's worker
+        if LIBC.unshare(0x10000000) != 0:  # CLONE_NEWUSER
+            return {"refused": errno.errorcode[ctypes.get_errno()]}
+        open_own_status()
+        held = status_fields()["CapEff"][0]
+        confinement = confine()
+        return {"held": held, "layers": confinement.layers, "held after": status_fields()["CapEff"][0]}
+
+    report = run_in_child(body)
+    if "refused" in report:
+        pytest.skip(f"no user namespace here ({report['refused']})")
+    assert int(report["held"], 16) != 0
+    assert LAYER_NO_CAPABILITIES in report["layers"] and int(report["held after"], 16) == 0
 
 
 @needs_seccomp

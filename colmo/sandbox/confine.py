@@ -47,6 +47,11 @@ apply and `Confinement.warnings` says what is missing:
    read root's 0600/0400 files (/proc/<coordinator>/environ with its API keys), signal or ptrace
    root processes, or regain root. The kernel resets the dumpable flag and the parent-death
    signal on a credential change, so both are set again after the drop.
+   `no_capabilities` (only if the process still holds any): capset() to empty sets. A worker
+   without root that made a user namespace of its own (`colmo.sandbox.worker`) holds every
+   capability in it, and so would its child: inert under the filter, which refuses each call
+   they would open (mount, unshare, chroot, ptrace, ...), and dropped all the same, so that a
+   run without root gives its child what a root run's child has: none.
 3. `parent_death_signal`: prctl(PR_SET_PDEATHSIG, SIGKILL by default) so the child dies with the
    zygote (it is tied to the forking thread: fork from the zygote's main thread). If the parent
    died before the signal was armed, the child sends it to itself at once.
@@ -75,6 +80,7 @@ from colmo.sandbox.seccomp import compiled_filter, install_filter
 LAYER_NO_DUMP = "no_dump"
 LAYER_NO_NEW_PRIVS = "no_new_privs"
 LAYER_USER = "user"
+LAYER_NO_CAPABILITIES = "no_capabilities"
 LAYER_PARENT_DEATH_SIGNAL = "parent_death_signal"
 LAYER_SECCOMP = "seccomp"
 UNPRIVILEGED_ID = 65534  # nobody / nogroup
@@ -82,6 +88,7 @@ UNPRIVILEGED_ID = 65534  # nobody / nogroup
 _PR_SET_PDEATHSIG = 1
 _PR_SET_DUMPABLE = 4
 _PR_SET_NO_NEW_PRIVS = 38
+_CAPABILITY_VERSION_3 = 0x20080522  # linux/capability.h: two 32-bit words per set
 _LIBC = ctypes.CDLL(None, use_errno=True)
 # Functions a policy process never needs: process creation and signals. Everything that starts
 # a process (`subprocess.Popen`, `os.spawn*`, `pty`) ends in one of these.
@@ -118,6 +125,31 @@ def make_undumpable() -> None:
     """prctl(PR_SET_DUMPABLE, 0): no process of the same uid may open this one's /proc/<pid>/
     mem, environ or fd entries, nor ptrace it (the worker at start-up, every child in `confine`)."""
     _prctl(_PR_SET_DUMPABLE, 0)
+
+
+class _CapabilityHeader(ctypes.Structure):
+    _fields_ = [("version", ctypes.c_uint32), ("pid", ctypes.c_int)]
+
+
+class _CapabilitySets(ctypes.Structure):
+    _fields_ = [("effective", ctypes.c_uint32), ("permitted", ctypes.c_uint32), ("inheritable", ctypes.c_uint32)]
+
+
+def _capability_sets(call: Callable[..., int]) -> ctypes.Array[_CapabilitySets]:
+    """The sets after capget() (read) or capset() (of empty sets) on this process."""
+    header, sets = _CapabilityHeader(_CAPABILITY_VERSION_3, 0), (_CapabilitySets * 2)()
+    if call(ctypes.byref(header), sets) != 0:
+        number = ctypes.get_errno()
+        raise OSError(number, os.strerror(number))
+    return sets
+
+
+def _holds_capabilities() -> bool:
+    return any(each.effective or each.permitted or each.inheritable for each in _capability_sets(_LIBC.capget))
+
+
+def _drop_capabilities() -> None:
+    _capability_sets(_LIBC.capset)
 
 
 def _drop_user(uid: int, gid: int) -> None:
@@ -162,6 +194,8 @@ def confine(
             attempt(LAYER_NO_DUMP, make_undumpable)
     else:
         warnings.append(f"{LAYER_USER}: skipped: not root (uid {os.getuid()}), ids kept")
+    if _holds_capabilities():
+        attempt(LAYER_NO_CAPABILITIES, _drop_capabilities)
 
     if parent_death_signal:
         if attempt(LAYER_PARENT_DEATH_SIGNAL, _prctl, _PR_SET_PDEATHSIG, parent_death_signal):
