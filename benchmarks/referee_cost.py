@@ -12,10 +12,10 @@ side in alternating rounds on one sandbox worker (medians reported):
 and the referee's share of a tuned program (`gfo.budget` fast evaluations, one referee).
 
 With `--cpu`, also the CPU time of the same work without confinement, in processes this script
-forks: the fast path (`evaluate_program` here) against the referee's two sides (the worker's
-loop here, `serve_policy` in a forked child), each process's `time.process_time`. On a loaded
-machine wall times mostly measure the share of a core the scheduler gives; CPU time is what the
-code costs.
+forks: the fast path (the program checked and compiled, then `evaluate_program`, here) against
+the referee's two sides (the worker's loop here, `serve_policy`, which checks and compiles too,
+in a forked child), each process's `time.process_time`. On a loaded machine wall times mostly
+measure the share of a core the scheduler gives; CPU time is what the code costs.
 
     python benchmarks/referee_cost.py                       # every task, 5 rounds
     python benchmarks/referee_cost.py --tasks pendulum cheetah --rounds 3 --cpu
@@ -34,7 +34,7 @@ from colmo.evaluation import FAST, REFEREE, EvalRequest
 from colmo.executor import LocalExecutor
 from colmo.program import parametrize
 from colmo.rollout import episode_seeds, evaluate_program
-from colmo.sandbox.namespace import Program, template
+from colmo.sandbox.namespace import Program, compile_or_explain, template
 from colmo.sandbox.referee import LOCKSTEP, referee_evaluation, serve_policy
 from colmo.specs import load_spec
 
@@ -78,12 +78,13 @@ def cpu_seconds(task: str, seeds: tuple[int, ...], rounds: int) -> dict[str, lis
     envs = [spec.make_environment() for _ in range(min(len(seeds), LOCKSTEP))]
     for name in spec.allowed_imports:
         template(name)
-    trusted = Program(program.skeleton, spec.allowed_imports, program.values)
     request = EvalRequest(str(spec.path), (), seeds, program.skeleton, program.values, spec.allowed_imports, mode=REFEREE)
 
     def fast() -> float:
         start = time.process_time()
-        evaluate_program(envs[0], trusted.new_policy, seeds)
+        # As the fast path's child does (and the referee's child, timed below): check and compile, then run.
+        checked, _ = compile_or_explain(request.skeleton, request.allowed_imports, request.params)
+        evaluate_program(envs[0], checked.new_policy, seeds)
         return time.process_time() - start
 
     def refereed() -> tuple[float, float]:
