@@ -24,7 +24,9 @@ filter refuses every open, read-only included, so whatever it needs must be impo
 in the zygote before the fork); see the metadata of a path it names (stat, access); use the CPU and
 memory its rlimits allow, on one thread (the filter refuses threads); write to the descriptors
 it kept. Other processes running as the unprivileged uid (nobody, by default) share it with
-the child: pass a uid nothing else uses where that matters.
+the child: pass a uid nothing else uses where that matters. Landlock would add nothing: it
+governs the files a process opens (the child opens none) and, in newer kernels, TCP ports,
+signals and abstract sockets (all refused), not the metadata that stays visible.
 
 Layers, in the order `confine()` applies them; when the kernel refuses one, the others still
 apply and `Confinement.warnings` says what is missing:
