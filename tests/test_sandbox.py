@@ -406,3 +406,20 @@ def test_a_failure_the_child_reports_fails_its_episode_with_its_reason():
 def test_a_malformed_answer_fails_the_evaluation_as_tampering(answer):
     evaluation = _refereed(answer)
     assert (evaluation.returns, evaluation.failure) == ((), "tampering: the policy process sent a malformed action")
+
+
+def test_a_worker_keeps_the_simulators_of_its_last_few_tasks_only():
+    # A robustness report asks for ~36 tasks (one per perturbation); a worker that kept every one's
+    # simulators ran out of address space and failed to build the environments after the first dozen.
+    from colmo.config import PerturbConfig
+    from colmo.environments.perturb import with_perturbation
+    from colmo.sandbox.worker import KEPT_TASKS, Worker
+
+    worker = Worker()
+    tasks = [tuple(sorted(with_perturbation({}, PerturbConfig(mass=0.05 * (k + 1))).items())) for k in range(KEPT_TASKS + 3)]
+    for env in tasks:
+        simulators = worker.environments_for(EvalRequest("pendulum.py", env, (0, 1, 2), "", (), (), mode=REFEREE))
+        assert len(simulators) == 3
+    assert list(worker.environments) == [("pendulum.py", env) for env in tasks[-KEPT_TASKS:]]
+    again = worker.environments_for(EvalRequest("pendulum.py", tasks[-1], (5,), "", (), (), mode=REFEREE))
+    assert again[0] is worker.environments[("pendulum.py", tasks[-1])][0]  # the last task's simulators are reused

@@ -23,6 +23,7 @@ coordinator are JSON over the connection it was given.
 
 from __future__ import annotations
 
+import collections
 import ctypes
 import dataclasses
 import gc
@@ -55,17 +56,28 @@ _CHILD_EXITS = {
 }
 
 
+# Tasks (spec and environment options) whose simulators a worker keeps: a search uses one or two
+# (training and held-out episodes share theirs), a robustness report one per grid point (about
+# 36). Keeping them all (up to 16 simulators each) took a worker past its address-space limit: every
+# grid point after the held-out score failed to build its environment ("Could not allocate memory").
+KEPT_TASKS = 4
+
+
 class Worker:
-    """What a worker keeps between requests: simulators by (spec, options), and module templates."""
+    """What a worker keeps between requests: simulators by (spec, options), for the `KEPT_TASKS`
+    tasks used last."""
 
     def __init__(self) -> None:
-        self.environments: dict[tuple, list[Environment]] = {}
+        self.environments: collections.OrderedDict[tuple, list[Environment]] = collections.OrderedDict()
 
     def environments_for(self, request: EvalRequest) -> list[Environment]:
         """The simulators of `request`: one for a fast request, whose child runs the episodes one
         after another, one per episode of a lockstep batch for a referee request (`colmo.sandbox.referee`)."""
         key = (request.spec, request.env)
         envs = self.environments.setdefault(key, [])
+        self.environments.move_to_end(key)
+        while len(self.environments) > KEPT_TASKS:
+            self.environments.popitem(last=False)
         count = min(max(len(request.seeds), 1), LOCKSTEP) if request.mode == REFEREE else 1
         if len(envs) < count:
             from colmo.specs import load_spec
