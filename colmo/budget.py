@@ -13,11 +13,13 @@ drain early (a 60 s quadruped run used to reserve so much that it searched nothi
 
 What the drain and the finish cost is measured on the programs themselves: each program's
 final scores (`observe`: the worker seconds of its rounded constants' fast-path and referee
-evaluations, and the referee's seconds per episode), the median of the last few, the starter's
-first. Until then the starter's calibration stands in, scaled by how much slower the workers'
-recent evaluations run than the calibration's (`load_factor`, at least 1): a calibration is a
-few seconds of a machine whose load changes (2 cores shared with other jobs measured evaluations
-2-4 times slower than their calibration a minute earlier), and it pays the workers' cold start.
+evaluations, and the referee's alone), the median of the last few, the starter's first; the
+finish's referee evaluations are the starter's calibration (its fast path: the episodes' own
+cost; the referee's excess: a lockstep batch's round trips) scaled by how much dearer the
+programs' referee evaluations are. Until a program is in, the calibration stands in, scaled by
+how much slower the workers' recent evaluations run than the calibration's (`load_factor`, at
+least 1): a calibration is a few seconds of a machine whose load changes (2 cores shared with
+other jobs measured evaluations 2-4 times slower than their calibration a minute earlier).
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ from typing import Callable, Optional
 
 from colmo.config import SearchConfig
 from colmo.evaluation import Executor
-from colmo.finish import FINISH_SHARE, SAFETY, FinishPlan, plan_finish
+from colmo.finish import FINISH_SHARE, SAFETY, FinishPlan, RefereeCost, plan_finish
 from colmo.optimize.tune import ProgramResult
 from colmo.progress import duration
 
@@ -67,7 +69,8 @@ class TimeBudget:
         self.start = time.perf_counter()
         self.end = self.start - (process_seconds() if elapsed is None else elapsed) + max_seconds if max_seconds else math.inf
         self._starter_deadline = self.start + _STARTER_SHARE * (self.end - self.start)
-        self.episode_seconds = 0.0  # one referee episode of the starter: what the finish costs per episode
+        self.calibration = RefereeCost(0.0, 0.0)  # the starter's referee cost, from its calibration
+        self._calibration_referee = 0.0  # the calibration's referee evaluation, worker seconds
         self.estimated_seconds: Optional[float] = None  # the search by max_samples, before the first batch
         self.load_factor = 1.0  # the workers' recent seconds per evaluation over the calibration's
         self._lock = threading.Lock()
@@ -78,7 +81,7 @@ class TimeBudget:
         self._cfg: Optional[SearchConfig] = None
         self._calibration = 0.0  # worker seconds of the starter's fast and referee evaluations
         self._scoring: deque[float] = deque(maxlen=_OBSERVED)  # recent programs' final scores, worker seconds
-        self._referee_episode: deque[float] = deque(maxlen=_OBSERVED)  # and their referee's seconds per episode
+        self._referee: deque[float] = deque(maxlen=_OBSERVED)  # and their referee evaluations' alone
         self._finish_seconds = 0.0  # the finish's plan at the workers' current speed
         self._available = 0.0  # for the finish, at the calibration's speed
 
@@ -88,11 +91,12 @@ class TimeBudget:
         return self.end - self.start if math.isfinite(self.end) else 0.0
 
     @property
-    def finish_episode_seconds(self) -> float:
-        """One referee episode at the workers' current speed: what `colmo.finish` plans with."""
-        if self._referee_episode:
-            return statistics.median(self._referee_episode)
-        return self.episode_seconds * self.load_factor
+    def finish_referee_cost(self) -> RefereeCost:
+        """The referee's cost at the workers' current speed, for the programs the search makes:
+        what `colmo.finish` plans with."""
+        if self._referee and self._calibration_referee > 0:
+            return self.calibration.scaled(statistics.median(self._referee) / self._calibration_referee)
+        return self.calibration.scaled(self.load_factor)
 
     def _scoring_seconds(self) -> float:
         """Worker seconds a program costs once its tuning stops: its final scores."""
@@ -109,7 +113,7 @@ class TimeBudget:
             return
         with self._lock:
             self._scoring.append(result.scoring_seconds)
-            self._referee_episode.append(result.evaluation.seconds / len(result.evaluation.returns))
+            self._referee.append(result.evaluation.seconds)
             if self._executor is not None:
                 self._plan_finish()
 
@@ -154,21 +158,22 @@ class TimeBudget:
                     self._followed = now
                     self._follow_load()
 
-    def plan(self, cfg: SearchConfig, calibration: float, program_seconds: float, executor: Executor) -> None:
-        """The run's duration estimated from the starter's calibration (`calibration` seconds
-        for its training episodes, fast path and referee) and tuning (`program_seconds`), the
-        search's deadline set to leave the finish and the programs in flight their time, both
-        said in one line; from then on the deadline follows `executor`'s speed."""
+    def plan(self, cfg: SearchConfig, calibration: tuple[float, float], program_seconds: float, executor: Executor) -> None:
+        """The run's duration estimated from the starter's calibration (worker seconds of its
+        fast-path and referee evaluations on the training episodes) and tuning
+        (`program_seconds`), the search's deadline set to leave the finish and the programs in
+        flight their time, both said in one line; from then on the deadline follows `executor`'s speed."""
         workers = executor.n_workers
-        self.episode_seconds = calibration / cfg.task.episodes
+        self.calibration = RefereeCost.of(*calibration, cfg.task.episodes)
+        self._calibration_referee = calibration[1]
         self._reference = executor.busy_seconds / executor.evaluations_done if executor.evaluations_done else 0.0
         concurrent_programs = cfg.llm.batch_size * cfg.search.queue_size
         in_parallel = max(1, min(concurrent_programs, workers // cfg.gfo.workers))
         self.estimated_seconds = cfg.search.max_samples * program_seconds / in_parallel
-        plan = plan_finish(cfg, self.episode_seconds, workers)
+        plan = plan_finish(cfg, self.calibration, workers)
         limit = "max_samples"
         if self.max_seconds:
-            self._calibration = calibration  # the starter's two evaluations, as a program's final scores are
+            self._calibration = sum(calibration)  # the starter's two evaluations, as a program's final scores are
             self._cfg, self._executor, self._available = cfg, executor, FINISH_SHARE * max(self.end - time.perf_counter(), 0.0)
             self._recent.append((executor.evaluations_done, executor.busy_seconds))
             plan = self._plan_finish()
@@ -187,7 +192,7 @@ class TimeBudget:
 
     def _plan_finish(self) -> FinishPlan:
         """The finish planned at the workers' current speed; the deadlines leave it its time."""
-        plan = plan_finish(self._cfg, self.finish_episode_seconds, self._executor.n_workers, self._available)
+        plan = plan_finish(self._cfg, self.finish_referee_cost, self._executor.n_workers, self._available)
         self._finish_seconds = plan.seconds
         return plan
 

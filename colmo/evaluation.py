@@ -189,6 +189,9 @@ class Evaluator:
     timeout_s: float  # per fast-path request
     referee_timeout_s: float  # per referee request (slower: a round trip per control step)
     memory_mb: int
+    # Worker seconds of the starter's fast-path and referee evaluations on these episodes, which
+    # set the time limits (`colmo.optimize.tune.calibrated`); (0, 0) until calibrated.
+    calibration: tuple[float, float] = (0.0, 0.0)
 
     @classmethod
     def for_task(cls, spec: "Spec", env: dict[str, Any], seeds: Sequence[int], memory_mb: int, timeout_s: float = PROVISIONAL_TIMEOUT_S) -> "Evaluator":

@@ -11,8 +11,9 @@ optional, and none can fail the search: a missing OpenGL or a simplification tha
 nothing to remove is a line in the log and in the summary.
 
 With `search.max_seconds`, the whole run (from the start of the process) must end by the limit,
-this work included: `plan_finish` estimates what each step costs from the starter's calibration
-(seconds per referee episode) and, where the full work does not fit in the time it is given,
+this work included: `plan_finish` estimates what each step costs from what the referee costs
+(`RefereeCost`: per episode, and per lockstep batch of episodes, measured on the starter and the
+search's programs) and, where the full work does not fit in the time it is given,
 makes each step cheaper (fewer held-out episodes and programs, a shorter simplification, a
 smaller video at fewer frames per second); the search stops early enough to leave that time.
 At the end, `finish` plans again with the time actually left, and each step ends by its slot;
@@ -36,6 +37,7 @@ from colmo.evaluation import CANCELLED, Evaluator, Executor
 from colmo.heldout import heldout_evaluator, heldout_score, robustness_of
 from colmo.record import EVALUATED, SampleRecord, Summary, Totals
 from colmo.robustness import grid_points, save
+from colmo.sandbox.referee import LOCKSTEP
 from colmo.store import SIMPLIFIED_POLICY_FILE, ProgramStore
 
 if TYPE_CHECKING:
@@ -51,6 +53,31 @@ _RENDER_FIXED_S = 5.0
 _VIDEO_S = 20.0  # seconds of frames for a full-size video at its full frame rate, at most
 _VIDEO_MIN_S = 2.0  # seconds of frames for a small video at a low frame rate
 _SMALL = (320, 240)
+
+
+@dataclass(frozen=True)
+class RefereeCost:
+    """What the referee's evaluations cost a worker: each episode's simulator and policy
+    (`episode`), and each lockstep batch of up to `LOCKSTEP` episodes its round trips, one per
+    control step shared by the batch (`batch`). A 100-episode held-out score costs far less than
+    ten 10-episode ones: on the pendulum it took a fifth of what their per-episode cost said."""
+
+    episode: float
+    batch: float
+
+    @classmethod
+    def of(cls, fast_seconds: float, referee_seconds: float, episodes: int) -> "RefereeCost":
+        """From a fast-path and a referee evaluation of one program on the same `episodes` (one
+        lockstep batch): the fast path's time is the episodes' own, the referee's excess the batch's."""
+        return cls(fast_seconds / max(episodes, 1), max(referee_seconds - fast_seconds, 0.0))
+
+    def scaled(self, factor: float) -> "RefereeCost":
+        return RefereeCost(self.episode * factor, self.batch * factor)
+
+    def seconds(self, episodes: int, workers: int) -> float:
+        """`episodes` spread over `workers`, each worker's share in lockstep batches, with `SAFETY`."""
+        share = math.ceil(episodes / max(workers, 1))
+        return SAFETY * max(share * self.episode + math.ceil(share / LOCKSTEP) * self.batch, 0.01)
 
 
 @dataclass(frozen=True)
@@ -82,14 +109,14 @@ class FinishPlan:
         return ", ".join(parts) + (" (reduced to fit search.max_seconds)" if self.reduced else "")
 
 
-def plan_finish(cfg: SearchConfig, episode_seconds: float, workers: int, available: float = math.inf) -> FinishPlan:
+def plan_finish(cfg: SearchConfig, referee: RefereeCost, workers: int, available: float = math.inf) -> FinishPlan:
     """The finish as configured if it fits in `available` seconds, else each step cheaper, in
-    equal shares of it. `episode_seconds`: one referee episode (from the starter's calibration)."""
-    episode = SAFETY * max(episode_seconds, 0.01)
+    equal shares of it. `referee`: what its evaluations cost (measured on the search's programs)."""
+    episode = referee.seconds(1, 1)  # one episode alone: the render's
     episodes, top, workers = cfg.evaluation.episodes, cfg.evaluation.top, max(workers, 1)
 
     def heldout_cost(programs: int, n: int) -> float:
-        return programs * math.ceil(n / workers) * episode
+        return programs * referee.seconds(n, workers)
 
     # The simplifier measures the best program twice on both episode sets, then a few rounds.
     simplify = 6 * (heldout_cost(1, episodes) + heldout_cost(1, cfg.task.episodes)) if cfg.evaluation.simplify else 0.0
@@ -112,14 +139,14 @@ def plan_finish(cfg: SearchConfig, episode_seconds: float, workers: int, availab
     # longer simplification share what remains.
     measurements = 3 if cfg.evaluation.simplify else 0
     training = heldout_cost(1, cfg.task.episodes)
-    rounds = max(1, int(max(left - measurements * training, 0.0) / (1 + measurements) // episode))  # one episode per worker at a time
-    per_program = min(math.ceil(episodes / workers), rounds)
-    one = per_program * episode  # a program's held-out score
+    budget = max(left - measurements * training, 0.0) / (1 + measurements)  # for one held-out score
+    held_out = next((n for n in range(episodes, workers, -workers) if heldout_cost(1, n) <= budget), min(workers, episodes))
+    one = heldout_cost(1, held_out)  # a program's held-out score
     spare = left - one - measurements * (one + training)
     kept = min(top, 1 + max(int(spare / (1 + cfg.evaluation.simplify) // one), 0))
     video = max(render - episode - _RENDER_FIXED_S, _VIDEO_MIN_S)
     return FinishPlan(
-        kept, min(episodes, per_program * workers), kept * one,
+        kept, held_out, kept * one,
         max(left - kept * one, 0.0) if cfg.evaluation.simplify else 0.0, render, video, (640, 480) if video >= _VIDEO_S else _SMALL, True, robustness,
     )
 
@@ -160,14 +187,14 @@ def _left(until: float) -> float:
 
 def finish(
     cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator: Evaluator, run_dir: Path,
-    until: float = math.inf, episode_seconds: float = 0.0,
+    until: float = math.inf, referee: RefereeCost = RefereeCost(0.0, 0.0),
 ) -> BestPrograms:
     """Held-out scores of the top programs (stored with them), then the best one simplified and
     rendered, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`."""
     best = BestPrograms()
     warming = _warm_up_render() if cfg.evaluation.render else None
     started, took = time.monotonic(), {}  # seconds each step took, for the closing log line
-    plan = plan_finish(cfg, episode_seconds, executor.n_workers, max(_left(until), 0.0))
+    plan = plan_finish(cfg, referee, executor.n_workers, max(_left(until), 0.0))
     if plan.reduced:
         log.warning("finishing in %.0f s: %s", max(_left(until), 0.0), plan.describe(cfg))
     top = top_records(store, plan.top)

@@ -130,11 +130,9 @@ class Search:
             try:
                 if not self._wants_probe():  # a generator that cannot start ends the run before any work
                     self._start_generator()
-                busy = self.executor.busy_seconds  # the calibration's worker seconds, not its wall time, scale the budget
                 self.evaluator = self.outcomes.evaluator = training_evaluator(self.spec, self.cfg.task, self.cfg.executor, self.executor, self.cfg.seed)
-                calibration = self.executor.busy_seconds - busy
                 self.database = ProgramDatabase(self.cfg.database, self._starter(), self.cfg.seed)
-                self.budget.plan(self.cfg, calibration, self.program_seconds, self.executor)
+                self.budget.plan(self.cfg, self.evaluator.calibration, self.program_seconds, self.executor)
                 self.best_so_far = [(0, self.database.best.score)]
                 to_evaluate = self._replay()
                 self._start_generator()
@@ -150,7 +148,7 @@ class Search:
             if self.database is not None and self.stop_reason in FINISHED:  # a stopped run finishes when resumed
                 best = finish(
                     self.cfg, self.store, self.executor, self.evaluator, self.run_dir,
-                    until=self.budget.finish_by(), episode_seconds=self.budget.finish_episode_seconds,
+                    until=self.budget.finish_by(), referee=self.budget.finish_referee_cost,
                 )
             best_program = self.database.best if self.database else None
             summary = best.summary(self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals())

@@ -9,7 +9,6 @@ from __future__ import annotations
 import ast
 import contextlib
 import json
-import math
 import re
 import sqlite3
 import time
@@ -20,7 +19,7 @@ import pytest
 from conftest import compose, run_colmo
 
 from colmo.budget import TimeBudget
-from colmo.finish import SAFETY, plan_finish
+from colmo.finish import SAFETY, RefereeCost, plan_finish
 from colmo.render import PLOT_FILE, VIDEO_FILE
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, STORE_FILE, SUMMARY_FILE
 
@@ -100,7 +99,7 @@ def planned_budget(max_seconds: float, programs: list[int], calibration: float =
     """A budget planned at its start, its programs in flight read from `programs[0]`."""
     budget = TimeBudget(max_seconds, lambda: programs[0], elapsed=0.0)
     cfg = compose("search", "task=pendulum", f"search.max_seconds={max_seconds}", "evaluation.render=false", "evaluation.simplify=false")
-    budget.plan(cfg, calibration, program_seconds=1.0, executor=IdleWorkers())
+    budget.plan(cfg, (calibration / 2, calibration / 2), program_seconds=1.0, executor=IdleWorkers())
     return budget
 
 
@@ -132,13 +131,21 @@ def test_a_batch_starts_only_while_the_run_can_still_drain_it():
 @pytest.mark.parametrize("available", [12.0, 15.0, 22.0, 40.0])
 def test_a_finish_cut_to_fit_still_leaves_the_simplification_room_to_start(available):
     cfg = compose("search", "task=pendulum")
-    episode_seconds, workers = 0.05, 2
-    assert not plan_finish(cfg, episode_seconds, workers).reduced  # about a minute, as configured
-    plan = plan_finish(cfg, episode_seconds, workers, available)
+    referee, workers = RefereeCost(episode=0.03, batch=0.3), 2
+    assert not plan_finish(cfg, referee, workers).reduced  # about a minute, as configured
+    plan = plan_finish(cfg, referee, workers, available)
     assert plan.reduced and plan.seconds <= available + 1e-9 and plan.top >= 1
     # What finish() requires before it simplifies: two measurements of the best program (its
     # training and held-out episodes), and a round of candidates after them.
-    episode = SAFETY * episode_seconds
-    best_measured = math.ceil(plan.heldout_episodes / workers) * episode + math.ceil(cfg.task.episodes / workers) * episode
+    best_measured = referee.seconds(plan.heldout_episodes, workers) + referee.seconds(cfg.task.episodes, workers)
     assert plan.simplify_seconds >= 3 * best_measured - 1e-9
-    assert plan.render_seconds >= episode + 2.0  # the episode it films and a few frames
+    assert plan.render_seconds >= referee.seconds(1, 1) + 2.0  # the episode it films and a few frames
+
+
+def test_the_referee_cost_counts_lockstep_batches_not_episodes():
+    # Calibrated on 10 episodes: 0.1 s on the fast path, 0.4 s by the referee (0.3 s of round trips).
+    referee = RefereeCost.of(0.1, 0.4, 10)
+    assert referee.seconds(10, 1) == pytest.approx(SAFETY * 0.4)
+    assert referee.seconds(16, 1) == pytest.approx(SAFETY * (16 * 0.01 + 0.3))  # one batch
+    assert referee.seconds(100, 2) == pytest.approx(SAFETY * (50 * 0.01 + 4 * 0.3))  # 50 a worker: 4 batches
+    assert referee.scaled(2).seconds(100, 2) == pytest.approx(2 * referee.seconds(100, 2))

@@ -14,7 +14,7 @@ from colmo.cli import help_text
 from colmo.config import HeldoutConfig, PerturbConfig
 from colmo.environments.perturb import PerturbedEnvironment, with_perturbation
 from colmo.errors import ConfigError
-from colmo.finish import plan_finish
+from colmo.finish import RefereeCost, plan_finish
 from colmo.rollout import episode_seeds, evaluate_policy
 from colmo.specs import load_spec
 from colmo.store import run_settings
@@ -132,20 +132,20 @@ def test_colmo_evaluate_robustness_reports_each_magnitude_nominal_first_and_repe
 def test_the_finish_plans_the_robustness_report_whole_or_not_at_all():
     grid = ("evaluation.robustness_magnitudes=[0.1,0.2]", "evaluation.robustness_delays=[1]", "evaluation.robustness_episodes=3")
     quiet = ("evaluation.simplify=false", "evaluation.render=false", "evaluation.top=1", "evaluation.episodes=2")
-    assert plan_finish(compose("search", *quiet, *grid), 1.0, 2).robustness_seconds == 0  # off by default
+    assert plan_finish(compose("search", *quiet, *grid), RefereeCost(1.0, 0.0), 2).robustness_seconds == 0  # off by default
     on = compose("search", *quiet, *grid, "evaluation.robustness=true")
-    full = plan_finish(on, 1.0, 2)
+    full = plan_finish(on, RefereeCost(1.0, 0.0), 2)
     # 1 + 8 x 2 + 1 = 18 points of 3 episodes on 2 workers (2 rounds), each episode 1.5 s on a loaded machine
     assert full.robustness_seconds == pytest.approx(18 * 2 * 1.5) and full.seconds == pytest.approx(full.heldout_seconds + 54)
     assert "robustness report" in full.describe(on) and not full.reduced
-    short = plan_finish(on, 1.0, 2, available=30.0)
+    short = plan_finish(on, RefereeCost(1.0, 0.0), 2, available=30.0)
     assert short.reduced and short.robustness_seconds == 0 and "no robustness report" in short.describe(on)
     # Short of time, the report keeps its whole cost where that fits in an equal share (here a half: held-out,
     # robustness), and the held-out scores of 3 programs over 100 episodes (225 s) get the rest.
     heavy = compose("search", *quiet, *grid, "evaluation.robustness=true", "evaluation.top=3", "evaluation.episodes=100")
-    kept = plan_finish(heavy, 1.0, 2, available=110.0)
+    kept = plan_finish(heavy, RefereeCost(1.0, 0.0), 2, available=110.0)
     assert kept.reduced and kept.robustness_seconds == 54 and kept.seconds <= 110
-    assert plan_finish(heavy, 1.0, 2, available=100.0).robustness_seconds == 0
+    assert plan_finish(heavy, RefereeCost(1.0, 0.0), 2, available=100.0).robustness_seconds == 0
 
 
 def test_a_search_with_evaluation_robustness_saves_and_logs_its_best_policys_report(tmp_path):

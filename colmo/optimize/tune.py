@@ -220,6 +220,7 @@ def calibrated(executor: Executor, evaluator: Evaluator, starter: ParametricProg
     failure = fast.failure or referee.failure
     if failure:
         raise ConfigError(f"the starter policy in {evaluator.spec} fails: {failure}")
+    evaluator = replace(evaluator, calibration=(fast.seconds, referee.seconds))
     if timeout_s is not None:
         return replace(evaluator, timeout_s=timeout_s, referee_timeout_s=timeout_s)
     return replace(
