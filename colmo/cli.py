@@ -5,9 +5,10 @@ starts, the command line is read with Hydra's own argument parser and the config
 of a sweep is composed and validated (every value of a choice or range sweep, both ends of a
 sweeper's interval; `check` vets the files it names), so anything a user can get wrong ends in
 one line on stderr (`colmo: error: ...`) and exit code 2 whatever Hydra flag is used
-(`--cfg job task=nope` too), and leaves no output directory. A `ConfigError` or `RunError`
-during the run ends in one line and exit code 2 or 1 (a `RunError` from `check`, such as no
-language-model server answering, too). `hydra.verbose=true` shows the traceback instead. Shell
+(`--cfg job task=nope` too), and leaves no output directory (an app's `check_command_line(argv)`
+runs these checks alone, in process). A `ConfigError` or `RunError` during the run ends in one
+line and exit code 2 or 1 (a `RunError` from `check`, such as no language-model server
+answering, too). `hydra.verbose=true` shows the traceback instead. Shell
 completion (`-sc install=bash`, `-sc query=bash`) is Hydra's, without the schema entries and, on
 each Tab, without importing the plugins it does not need (`_shell_completion`). Every file
 and directory an app creates is private (umask 077: 0600 and 0700).
@@ -33,7 +34,7 @@ import textwrap
 import threading
 from importlib import resources
 from pathlib import Path
-from typing import Any, Callable, NoReturn, Optional
+from typing import Any, Callable, NoReturn, Optional, Protocol
 
 import hydra
 from hydra.core.config_store import ConfigStore
@@ -159,9 +160,35 @@ def _sweep_variants(overrides: list[str], multirun: bool) -> list[list[str]]:
     return variants
 
 
+class App(Protocol):
+    """A colmo command (what `hydra_app` makes): called, it runs the command line in `sys.argv`;
+    `check_command_line(argv)` raises what it would refuse `argv` with before Hydra starts
+    (`ConfigError`, or a `RunError` from its input check) and runs nothing, so that the checks
+    can be tested without starting a process per command line."""
+
+    def __call__(self) -> None: ...
+
+    def check_command_line(self, argv: list[str]) -> None: ...
+
+
+def _overrides(args: Any) -> list[str]:
+    """The overrides of a parsed command line, `--config-dir` as Hydra's search path."""
+    overrides = list(args.overrides)
+    if args.config_dir:
+        overrides.append(f"hydra.searchpath=[file://{os.path.abspath(args.config_dir)}]")
+    return overrides
+
+
+def _parse(argv: list[str]) -> Any:
+    """A command line as Hydra's own parser reads it."""
+    from hydra._internal.utils import get_args_parser
+
+    return get_args_parser().parse_args(argv)
+
+
 def hydra_app(
     config_name: str, check: Optional[Callable[[Any], None]] = None, example: Optional[str] = None
-) -> Callable[[Callable[[Any], Any]], Callable[[], None]]:
+) -> Callable[[Callable[[Any], Any]], App]:
     """`hydra.main` over colmo's bundled configs, with one-line errors (module docstring).
 
     `check(cfg)` vets the inputs a config names (files, directories) for every job of a sweep
@@ -169,7 +196,7 @@ def hydra_app(
     `example`: the overrides of the one-run example in `--help` (default: two groups' options
     and `seed=1`)."""
 
-    def decorate(run: Callable[[Any], Any]) -> Callable[[], None]:
+    def decorate(run: Callable[[Any], Any]) -> App:
         @functools.wraps(run)
         def task_function(cfg: DictConfig) -> Any:
             try:
@@ -181,11 +208,19 @@ def hydra_app(
 
         hydra_main = hydra.main(config_path=f"pkg://{CONFIG_MODULE}", config_name=config_name, version_base="1.3")(task_function)
 
-        def main() -> None:
-            from hydra._internal.utils import get_args_parser  # Hydra's own command-line parser
+        def check_overrides(args: Any) -> None:
+            """Compose and validate the config of every job the parsed command line `args` would
+            run, and `check` it; nothing to do for shell completion and `--hydra-help`."""
+            if args.shell_completion or args.hydra_help:
+                return
+            for variant in _sweep_variants(_overrides(args), multirun=bool(args.multirun)):
+                cfg = compose(config_name, variant, output_dir=None if args.cfg or args.info else args.multirun)
+                if check is not None and not (args.cfg or args.info):
+                    check(cfg)
 
+        def main() -> None:
             register_schemas()
-            args = get_args_parser().parse_args(sys.argv[1:])
+            args = _parse(sys.argv[1:])
             if args.help:
                 try:
                     print(help_text(config_name, run.__doc__ or "", list(args.overrides), example))
@@ -194,17 +229,10 @@ def hydra_app(
                 return
             if sum(map(bool, (args.run, args.multirun, args.cfg, args.info, args.shell_completion))) > 1:
                 _fail(ConfigError("only one of --run, --multirun, --cfg, --info and --shell-completion can be given"), verbose=False)
-            if not (args.shell_completion or args.hydra_help):
-                overrides = list(args.overrides)
-                if args.config_dir:
-                    overrides.append(f"hydra.searchpath=[file://{os.path.abspath(args.config_dir)}]")
-                try:
-                    for variant in _sweep_variants(overrides, multirun=bool(args.multirun)):
-                        cfg = compose(config_name, variant, output_dir=None if args.cfg or args.info else args.multirun)
-                        if check is not None and not (args.cfg or args.info):
-                            check(cfg)
-                except Exception as error:  # one line: a composition error is the user's (exit 2), a RunError not (1)
-                    _fail(error, verbose=_verbose(overrides))
+            try:
+                check_overrides(args)
+            except Exception as error:  # one line: a composition error is the user's (exit 2), a RunError not (1)
+                _fail(error, verbose=_verbose(_overrides(args)))
             # Whatever the run writes is private, in a directory the user made too: programs'
             # code and failure messages (a program chooses its own), logs, the tracking store,
             # videos, also those that Hydra, MLflow, SQLite and ffmpeg create.
@@ -218,6 +246,7 @@ def hydra_app(
                 _exit_now(stop.code)
             _exit_now(0)
 
+        main.check_command_line = lambda argv: check_overrides(_parse(argv))
         return main
 
     return decorate
@@ -265,11 +294,18 @@ def _exit_now(code: Any) -> NoReturn:
     os._exit(0 if code is None else code)
 
 
+def refusal(error: BaseException) -> tuple[int, str]:
+    """The exit code and the one line (`colmo: error: ...`) an app ends with for `error`: the
+    user's (2) unless it is a `RunError` (1)."""
+    return EXIT_RUNTIME if isinstance(error, RunError) else EXIT_USAGE, f"colmo: error: {one_line(error)}"
+
+
 def _fail(error: BaseException, verbose: bool, code: Optional[int] = None) -> None:
     if verbose:
         raise error
-    print(f"colmo: error: {one_line(error)}", file=sys.stderr)
-    sys.exit(code if code is not None else EXIT_RUNTIME if isinstance(error, RunError) else EXIT_USAGE)
+    default, line = refusal(error)
+    print(line, file=sys.stderr)
+    sys.exit(code if code is not None else default)
 
 
 # -- help -------------------------------------------------------------------------------------

@@ -50,6 +50,21 @@ def run_colmo(module: str, *overrides: str, cwd: Path, timeout: float = 300) -> 
     )
 
 
+def refused(app, *argv: str) -> tuple[int, str]:
+    """The exit code and the one line with which `app` (a colmo command: `colmo.__main__.main`,
+    `colmo.optimize.__main__.main`, ...) refuses the command line `argv` before Hydra starts,
+    checked in this process (`colmo.cli.App.check_command_line`: no interpreter and imports to
+    start); the test fails if the command line would run. Relative paths are the working
+    directory's, as for a user."""
+    from colmo.cli import refusal
+
+    try:
+        app.check_command_line(list(argv))
+    except Exception as error:  # what the app would print and exit with
+        return refusal(error)
+    pytest.fail(f"`{' '.join(argv)}` passes the checks: it would run")
+
+
 def unavailable(reason: str, in_ci: str) -> None:
     """Skip a test whose prerequisite is missing; under CI (`CI=true`) fail instead, saying why
     the test must run there (`in_ci`)."""

@@ -1,10 +1,14 @@
 """Bad input to `python -m colmo`: one clear line naming the problem and the fix, exit code 2.
 
-The README's bad-input table is this test's cases and the messages they print.
+The README's bad-input table is this test's cases and the messages they print. They are checked
+in process (`colmo.cli.App.check_command_line`), what the command prints and exits with in
+tests/test_cli.py.
 """
 
 import pytest
-from conftest import run_colmo
+from conftest import refused, run_colmo
+
+from colmo.__main__ import main as colmo
 
 SPEC_WITH_SYNTAX_ERROR = '"""A task."""\ndef make_environment(:\n'
 SPEC_WITHOUT_POLICY = '"""A task."""\nfrom colmo.environments.pendulum import PendulumSwingup\n\ndef make_environment(**options):\n    return PendulumSwingup(**options)\n'
@@ -30,15 +34,12 @@ CASES = [
 
 
 @pytest.mark.parametrize("overrides, message", CASES, ids=[" ".join(o) for o, _ in CASES])
-def test_bad_input_is_one_line_and_exit_2(tmp_path, overrides, message):
+def test_bad_input_is_one_line_and_exit_2(tmp_path, monkeypatch, overrides, message):
     (tmp_path / "syntax.py").write_text(SPEC_WITH_SYNTAX_ERROR)
     (tmp_path / "no_policy.py").write_text(SPEC_WITHOUT_POLICY)
-    overrides = [o.format(tmp=tmp_path) for o in overrides]
-    result = run_colmo("colmo", *overrides, "tracker=none", cwd=tmp_path)
-    assert result.returncode == 2, result.stderr
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1, result.stderr
-    assert lines[0].startswith("colmo: error: ") and message in lines[0], lines[0]
+    monkeypatch.chdir(tmp_path)
+    code, line = refused(colmo, *(o.format(tmp=tmp_path) for o in overrides), "tracker=none")
+    assert code == 2 and message in line, line
     assert not (tmp_path / "outputs").exists()  # nothing ran
 
 

@@ -1,6 +1,8 @@
 """The command line as a user meets it: the console scripts, `--help` built from the schemas for
 the options chosen, shell completion, and one-line errors (exit 2 for a bad value, 1 for a
-runtime failure, no traceback unless `hydra.verbose=true`) whatever Hydra flag is given."""
+runtime failure, no traceback unless `hydra.verbose=true`) whatever Hydra flag is given. What a
+command refuses before Hydra starts is checked in process (`refused`) beyond one run of each
+kind of refusal through the console script."""
 
 import socket
 import subprocess
@@ -9,7 +11,11 @@ from importlib import resources
 from pathlib import Path
 
 import pytest
+from conftest import refused
 from mlflow import MlflowClient
+
+from colmo.__main__ import main as colmo
+from colmo.cli import help_text, refusal
 
 BIN = Path(sys.executable).parent
 TINY = ("search.max_samples=2", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false",
@@ -60,19 +66,22 @@ def test_help_explains_groups_and_fields_without_schema_entries(tmp_path):
     assert not list(tmp_path.iterdir())  # help runs nothing
 
 
-def test_help_shows_the_fields_of_the_options_chosen(tmp_path):
-    text = script("colmo", "llm=llamacpp", "gfo=bo", "gfo.budget=7", "--help", cwd=tmp_path).stdout
+def test_help_shows_the_fields_of_the_options_chosen():
+    # In process: what `colmo llm=llamacpp gfo=bo gfo.budget=7 --help` prints (the test above
+    # runs the command), and `colmo-optimize tracker=mlflow --help`.
+    text = help_text("search", "", ["llm=llamacpp", "gfo=bo", "gfo.budget=7"])
     assert "    llamacpp     * In-process llama.cpp" in text and "    mutate         The embedded" in text
     assert "  llm.model_path=null\n      a local GGUF file" in text and "llm.crossover_rate" not in text
     assert "  gfo.sampler=tpe\n" in text and "  gfo.budget=7\n" in text
-    optimize = script("colmo-optimize", "tracker=mlflow", "--help", cwd=tmp_path)
-    assert optimize.returncode == 0 and optimize.stdout.startswith("colmo-optimize: tune the constants")
-    assert "  policy_file=???\n" in optimize.stdout and "  tracker.experiment=null\n" in optimize.stdout
+    optimize = help_text("optimize", "", ["tracker=mlflow"])
+    assert ": tune the constants" in optimize.splitlines()[0]
+    assert "  policy_file=???\n" in optimize and "  tracker.experiment=null\n" in optimize
 
 
-def test_help_with_a_bad_override_is_one_line(tmp_path):
-    line = one_error_line(script("colmo", "task=nope", "--help", cwd=tmp_path), 2)
-    assert "Could not find 'task/nope'" in line
+def test_help_with_a_bad_override_is_one_line():
+    with pytest.raises(Exception) as raised:  # what `colmo task=nope --help` prints in one line, exit 2
+        help_text("search", "", ["task=nope"])
+    assert "Could not find 'task/nope'" in refusal(raised.value)[1]
 
 
 def completions(line: str, cwd: Path, shell: str = "bash") -> list[str]:
@@ -108,23 +117,30 @@ def test_shell_completion_of_hydra_groups_offers_the_installed_plugins(tmp_path)
     assert {"hydra/launcher=basic", "hydra/launcher=slurm", "hydra/launcher=joblib"} <= set(offered)
 
 
-def test_cfg_job_prints_the_config_or_one_error_line(tmp_path):
+def test_cfg_job_prints_the_config_or_one_error_line(tmp_path, monkeypatch):
     good = script("colmo", "--cfg", "job", "gfo.budget=7", cwd=tmp_path)
     assert good.returncode == 0 and "budget: 7" in good.stdout, good.stderr
-    line = one_error_line(script("colmo", "--cfg", "job", "task=nope", cwd=tmp_path), 2)
-    assert "Could not find 'task/nope'; available: a1, ball_in_cup, cheetah, pendulum, quadruped" in line
+    monkeypatch.chdir(tmp_path)
+    code, line = refused(colmo, "--cfg", "job", "task=nope")
+    assert code == 2 and "Could not find 'task/nope'; available: a1, ball_in_cup, cheetah, pendulum, quadruped" in line
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_bad_value_is_one_line_exit_2_and_leaves_nothing(tmp_path):
+    line = one_error_line(script("colmo", "seed=-1", cwd=tmp_path), 2)
+    assert "seed must be >= 0, got -1" in line, line
     assert not list(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize("overrides, message", [
-    (["seed=-1"], "seed must be >= 0, got -1"),
     (["-m", "seed=0,-1"], "seed must be >= 0, got -1"),  # every value of a sweep is checked before any job runs
     (["-m", "gfo.budget=tag(int,interval(0,4))"], "gfo.budget must be >= 1, got 0"),  # the ends of a sweeper's interval too
     (["hydra.run.dir=/proc/colmo/run"], "cannot create the output directory /proc/colmo/run"),
-], ids=["seed", "sweep", "interval", "output dir"])
-def test_bad_values_are_one_line_exit_2_and_leave_nothing(tmp_path, overrides, message):
-    line = one_error_line(script("colmo", *overrides, cwd=tmp_path), 2)
-    assert message in line, line
+], ids=["sweep", "interval", "output dir"])
+def test_bad_values_of_sweeps_and_output_directories_are_refused_before_anything_runs(tmp_path, monkeypatch, overrides, message):
+    monkeypatch.chdir(tmp_path)
+    code, line = refused(colmo, *overrides)
+    assert code == 2 and message in line, line
     assert not list(tmp_path.iterdir())
 
 
@@ -148,7 +164,7 @@ def test_a_policy_file_that_is_a_directory_is_one_line(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
-def test_an_openai_server_that_does_not_answer_is_one_line_exit_1_before_anything_exists(tmp_path):
+def test_an_openai_server_that_does_not_answer_is_one_line_exit_1_before_anything_exists(tmp_path, monkeypatch):
     with socket.socket() as probe:  # a port nothing listens on: the connection is refused at once
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
@@ -158,6 +174,7 @@ def test_an_openai_server_that_does_not_answer_is_one_line_exit_1_before_anythin
     assert "start one" in line and "llm.base_url" in line
     assert result.stderr == line + "\n" and not result.stdout  # nothing ran: no sandbox, no search, no MLflow run
     assert not list(tmp_path.iterdir())  # no output directory, no MLflow store
-    sweep = script("colmo", "-m", "llm=openai", f"llm.base_url=http://127.0.0.1:{port}/v1", "seed=0,1", *TINY, cwd=tmp_path)
-    assert "no OpenAI-compatible server answers" in one_error_line(sweep, 1)
+    monkeypatch.chdir(tmp_path)
+    code, line = refused(colmo, "-m", "llm=openai", f"llm.base_url=http://127.0.0.1:{port}/v1", "seed=0,1", *TINY)
+    assert code == 1 and "no OpenAI-compatible server answers" in line
     assert not list(tmp_path.iterdir())
