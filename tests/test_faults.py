@@ -12,6 +12,7 @@ settings, empty and corrupt stores, and directories that cannot be written.
 from __future__ import annotations
 
 import json
+import logging
 import os
 import resource
 import signal
@@ -21,10 +22,16 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import run_colmo, start_colmo, wait_for
+from conftest import compose, refused, run_colmo, start_colmo, wait_for
+
+from colmo.__main__ import main as colmo
+from colmo.record import Summary
+from colmo.search import Search
 
 TINY = ("task.episodes=2", "tracker=none", "executor.workers=2", "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false")
-SLOW = ("gfo.budget=200", "llm.batch_size=4")  # programs that tune long enough to be caught in flight
+# Programs that tune long enough to be caught in flight: two batches of 4 are tuned together,
+# 320 evaluations (20 s on 2 loaded cores); the starter's tuning before them, 40.
+SLOW = ("gfo.budget=40", "llm.batch_size=4")
 
 
 def rows(run_dir: Path, columns: str = "sample, status, cut_short") -> list[tuple]:
@@ -43,37 +50,49 @@ def start(cwd: Path, *overrides: str, **popen) -> subprocess.Popen:
     return start_colmo("colmo", *overrides, cwd=cwd, **popen)
 
 
+def resume(run_dir: Path, *overrides: str) -> Summary:
+    """Resume the run in `run_dir` in this process (tests/test_search.py resumes through `colmo`)."""
+    return Search(compose("search", *overrides, f"resume={run_dir}"), run_dir).run()
+
+
 def run_dir_of(cwd: Path) -> Path:
     return wait_for(lambda: next(iter(cwd.glob("outputs/pendulum/*")), None), what="the run directory")
 
 
-def busy_workers(run_dir: Path) -> bool:
-    """Samples are being tuned: the first generated sample's outcome is stored, its batch mates
-    are in flight (each tunes for a while with `SLOW`)."""
-    return any(status != "pending" for _, status, _ in rows(run_dir))
+def pending_samples(run_dir: Path) -> set[int]:
+    return {sample for sample, status, _ in rows(run_dir) if status == "pending"}
+
+
+def being_tuned(run_dir: Path) -> bool:
+    """A generated batch is being tuned: its samples stay pending (a duplicate or a program that
+    fails at once would settle within moments)."""
+    before = pending_samples(run_dir)
+    time.sleep(0.2)
+    return bool(before & pending_samples(run_dir))
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_stop_signal_finishes_the_programs_in_flight_and_loses_nothing(tmp_path, signum):
     process = start(tmp_path, "search.max_samples=1000", *TINY, *SLOW)
     run_dir = run_dir_of(tmp_path)
-    wait_for(lambda: busy_workers(run_dir), timeout=600, what="the search to evaluate programs")
+    wait_for(lambda: being_tuned(run_dir), timeout=600, what="programs in tuning")
     process.send_signal(signum)
     _, stderr = process.communicate(timeout=300)
     assert process.returncode == 130, stderr
-    assert "resume with: colmo " in stderr and f"resume={run_dir}" in stderr
+    assert "resume with: colmo " in stderr and f"resume={run_dir}" in stderr and "Traceback" not in stderr
     stored = rows(run_dir)
     summary = json.loads((run_dir / "summary.json").read_text())
     assert summary["stop_reason"] == "interrupted"
     assert [sample for sample, *_ in stored] == list(range(summary["samples"]))  # every number once, none skipped
     assert summary["samples"] >= 1 and all(status in ("evaluated", "failed", "duplicate", "unusable") for _, status, _ in stored)
     assert any(cut_short for *_, cut_short in stored)  # tuning stopped at the next candidate, its best kept
+    assert (run_dir / "best_policy.py").is_file()
 
 
-def test_a_second_signal_stores_the_programs_in_flight_as_interrupted_and_resume_evaluates_them(tmp_path):
+def test_a_second_signal_stores_the_programs_in_flight_as_interrupted_and_resume_evaluates_them(tmp_path, monkeypatch):
     process = start(tmp_path, "search.max_samples=8", *TINY, *SLOW)
     run_dir = run_dir_of(tmp_path)
-    wait_for(lambda: busy_workers(run_dir), timeout=600, what="the search to evaluate programs")
+    wait_for(lambda: being_tuned(run_dir), timeout=600, what="programs in tuning")
     process.send_signal(signal.SIGINT)
     # Signals of one kind do not queue: the second is sent once the first has been handled.
     for line in process.stderr:
@@ -87,10 +106,10 @@ def test_a_second_signal_stores_the_programs_in_flight_as_interrupted_and_resume
     summary = json.loads((run_dir / "summary.json").read_text())
     assert summary["interrupted"] == len(interrupted) and summary["samples"] == len(rows(run_dir))
 
-    result = run_colmo("colmo", "search.max_samples=8", *TINY, "gfo.budget=4", f"resume={run_dir}", cwd=tmp_path)
-    assert result.returncode == 2 and "gfo" in result.stderr.splitlines()[-1]  # other scoring settings: refused
-    result = run_colmo("colmo", "search.max_samples=8", *TINY, *SLOW, f"resume={run_dir}", cwd=tmp_path, timeout=600)
-    assert result.returncode == 0, result.stderr
+    monkeypatch.chdir(tmp_path)
+    code, line = refused(colmo, "search.max_samples=8", *TINY, "gfo.budget=4", f"resume={run_dir}")
+    assert code == 2 and "gfo.budget=40; this command has gfo.budget=4" in line  # other scoring settings: refused
+    assert resume(run_dir, "search.max_samples=8", *TINY, *SLOW).stop_reason == "max_samples"
     after = rows(run_dir)
     assert [sample for sample, *_ in after] == list(range(8))
     assert all(status != "interrupted" for _, status, _ in after)
@@ -118,47 +137,47 @@ def test_a_full_disk_ends_the_search_cleanly_with_the_store_intact(tmp_path):
     # Whichever write failed (a batch's pending rows, or an outcome that landed before an
     # earlier sample's), the store's sample numbers have no gap: samples in flight stay pending.
     assert stored and [sample for sample, *_ in stored] == list(range(len(stored)))
-    result = run_colmo("colmo", *overrides[:-1], f"resume={run_dir}", "search.max_samples=" + str(len(stored) + 4), cwd=tmp_path)
-    assert result.returncode == 0, result.stderr
+    assert resume(run_dir, *overrides[:-1], "search.max_samples=" + str(len(stored) + 4)).stop_reason == "max_samples"
     after = rows(run_dir)
     assert [sample for sample, *_ in after] == list(range(len(stored) + 4))
     assert all(status != "pending" for _, status, _ in after)
 
 
-def test_a_killed_search_keeps_what_was_generated_and_resume_evaluates_it(tmp_path):
+def test_a_killed_search_keeps_what_was_generated_and_resume_evaluates_it(tmp_path, caplog):
     """SIGKILL while a batch is being tuned: its samples are in the store as `pending`, with the
     generator's output; the resumed run evaluates those outputs under their own numbers instead
     of generating new ones."""
     process = start(tmp_path, "search.max_samples=8", *TINY, *SLOW, start_new_session=True)
     run_dir = run_dir_of(tmp_path)
-
-    def pending_samples() -> set[int]:
-        return {sample for sample, status, _ in rows(run_dir) if status == "pending"}
-
-    def being_tuned() -> bool:  # pending for a while: not a duplicate about to settle, a program in tuning
-        before = pending_samples()
-        time.sleep(0.2)
-        return bool(before & pending_samples())
-
-    wait_for(being_tuned, timeout=600, what="a generated batch in the store")
+    wait_for(lambda: being_tuned(run_dir), timeout=600, what="programs in tuning")
     os.killpg(process.pid, signal.SIGKILL)  # the coordinator and its sandbox workers
     process.communicate(timeout=60)
     pending = {sample: raw for sample, status, raw in rows(run_dir, "sample, status, raw") if status == "pending"}
     assert pending
-    result = run_colmo("colmo", "search.max_samples=8", *TINY, *SLOW, f"resume={run_dir}", cwd=tmp_path, timeout=600)
-    assert result.returncode == 0, result.stderr
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        assert resume(run_dir, "search.max_samples=8", *TINY, *SLOW).stop_reason == "max_samples"
     after = {sample: (status, raw) for sample, status, raw in rows(run_dir, "sample, status, raw")}
     assert sorted(after) == list(range(8))
     assert all(after[sample][0] != "pending" and after[sample][1] == raw for sample, raw in pending.items())
-    assert f"{len(pending)} to evaluate again" in result.stdout + result.stderr
+    assert any(f"{len(pending)} to evaluate again" in message for message in caplog.messages)
+
+
+def has_run_settings(run_dir: Path) -> bool:
+    """The search holds the run directory's lock and has recorded its settings (a resume's input
+    check passes): from the moment it opens its store, before any evaluation."""
+    try:
+        with sqlite3.connect(f"file:{run_dir / 'programs.db'}?mode=ro", uri=True, timeout=30) as connection:
+            return bool(connection.execute("SELECT name FROM run").fetchall())
+    except sqlite3.OperationalError:  # no store yet, or not its schema
+        return False
 
 
 def test_a_second_search_into_a_run_directory_in_use_is_one_line(tmp_path):
-    first = start(tmp_path, "search.max_samples=1000", *TINY, *SLOW)
+    first = start(tmp_path, "search.max_samples=1000", *TINY)
     run_dir = run_dir_of(tmp_path)
     try:
-        wait_for(lambda: busy_workers(run_dir), timeout=600, what="the first search to run")
-        result = run_colmo("colmo", "search.max_samples=1000", *TINY, *SLOW, f"resume={run_dir}", cwd=tmp_path)
+        wait_for(lambda: has_run_settings(run_dir), timeout=600, what="the first search to open its store")
+        result = run_colmo("colmo", "search.max_samples=1000", *TINY, f"resume={run_dir}", cwd=tmp_path)
     finally:
         first.send_signal(signal.SIGINT)
         first.communicate(timeout=300)
@@ -170,21 +189,19 @@ def test_a_second_search_into_a_run_directory_in_use_is_one_line(tmp_path):
     (b"", "{path} is empty: not a colmo program store"),
     (b"garbage " * 100, "{path} is not a colmo program store (file is not a database)"),
 ])
-def test_empty_or_corrupt_stores_are_one_line_naming_the_file(tmp_path, content, message):
+def test_empty_or_corrupt_stores_are_one_line_naming_the_file(tmp_path, monkeypatch, content, message):
     run_dir = tmp_path / "run"
     run_dir.mkdir()
     (run_dir / "programs.db").write_bytes(content)
-    result = run_colmo("colmo", *TINY, f"resume={run_dir}", cwd=tmp_path)
-    assert result.returncode == 2
-    assert result.stderr.strip() == "colmo: error: " + message.format(path=run_dir / "programs.db")
+    monkeypatch.chdir(tmp_path)
+    assert refused(colmo, *TINY, f"resume={run_dir}") == (2, "colmo: error: " + message.format(path=run_dir / "programs.db"))
 
 
-def test_a_run_directory_that_cannot_be_written_is_one_line(tmp_path):
+def test_a_run_directory_that_cannot_be_written_is_one_line(tmp_path, monkeypatch):
     """Root ignores directory permissions, so the parent is made unwritable for everyone: it is
     a file."""
     blocker = tmp_path / "not_a_directory"
     blocker.write_text("")
-    result = run_colmo("colmo", *TINY, f"hydra.run.dir={blocker}/run", cwd=tmp_path)
-    assert result.returncode == 2, result.stderr
-    assert "Traceback" not in result.stderr
-    assert result.stderr.strip().splitlines()[-1].startswith(f"colmo: error: cannot create the output directory {blocker}/run: {blocker} is not a directory")
+    monkeypatch.chdir(tmp_path)
+    code, line = refused(colmo, *TINY, f"hydra.run.dir={blocker}/run")
+    assert code == 2 and line.startswith(f"colmo: error: cannot create the output directory {blocker}/run: {blocker} is not a directory")

@@ -9,8 +9,9 @@ import time
 from collections import Counter
 
 import pytest
-from conftest import compose, run_colmo, start_colmo
+from conftest import compose, refused, run_colmo, start_colmo
 
+from colmo.__main__ import main as colmo
 from colmo.generate import Generation, Generator
 from colmo.record import SampleRecord
 from colmo.search import Search
@@ -104,7 +105,9 @@ def test_sigkill_at_random_moments_then_resume_loses_nothing(tmp_path):
     assert summary["samples"] == stored_model_calls(run_dir) == 40
 
 
+@pytest.mark.slow
 def test_sigint_stops_gracefully_and_says_how_to_resume(tmp_path):
+    """tests/test_faults.py's stop-signal test checks all this, with programs caught in flight."""
     process = start_search(tmp_path, "search.max_samples=1000")
     wait_for_samples(tmp_path / "run", at_least=4)
     process.send_signal(signal.SIGINT)
@@ -119,24 +122,29 @@ def test_sigint_stops_gracefully_and_says_how_to_resume(tmp_path):
     assert "Traceback" not in stderr
 
 
-@pytest.mark.parametrize("make_dir, overrides, message", [
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory):
+    """The run directory of a finished 4-sample search (read, never written, by the tests)."""
+    run_dir = tmp_path_factory.mktemp("finished") / "run"
+    Search(compose("search", "search.max_samples=4", *TINY), run_dir).run()
+    return run_dir
+
+
+@pytest.mark.parametrize("finished, overrides, message", [
     (False, ["resume=/no/such/run"], "resume=/no/such/run is not a colmo run directory"),
     (True, ["task=cheetah"], "was made with task=pendulum; this command has task=cheetah"),
     (True, ["seed=1", "task.episodes=3"], "was made with seed=0, task.episodes=2; this command has seed=1, task.episodes=3"),
 ])
-def test_bad_resume_directories_exit_2(tmp_path, make_dir, overrides, message):
-    if make_dir:
-        Search(compose("search", "search.max_samples=4", *TINY), tmp_path / "old").run()
-        overrides = [*overrides, f"resume={tmp_path / 'old'}"]
-    result = run_colmo("colmo", *TINY, *overrides, cwd=tmp_path)
-    assert result.returncode == 2, result.stderr
-    assert result.stderr.strip().splitlines() == [f"colmo: error: {result.stderr.split('colmo: error: ')[1].strip()}"]
-    assert message in result.stderr
+def test_bad_resume_directories_exit_2(request, tmp_path, monkeypatch, finished, overrides, message):
+    if finished:
+        overrides = [*overrides, f"resume={request.getfixturevalue('finished_run')}"]
+    monkeypatch.chdir(tmp_path)
+    code, line = refused(colmo, *TINY, *overrides)
+    assert code == 2 and message in line, line
 
 
-def test_children_of_the_starter_name_it_as_their_parent(tmp_path):
-    Search(compose("search", "search.max_samples=4", *TINY), tmp_path).run()
-    with sqlite3.connect(tmp_path / "programs.db") as connection:
+def test_children_of_the_starter_name_it_as_their_parent(finished_run):
+    with sqlite3.connect(finished_run / "programs.db") as connection:
         starter_key = connection.execute("SELECT key FROM samples WHERE sample = -1").fetchone()[0]
         parents = [json.loads(p) for (p,) in connection.execute("SELECT parent_keys FROM samples WHERE sample >= 0")]
     assert starter_key and all(p == [starter_key] for p in parents)
