@@ -1,7 +1,9 @@
 """`python -m colmo.optimize`: tuning one policy file end to end, and its user errors."""
 
 import pytest
-from conftest import last_json_line, run_colmo
+from conftest import last_json_line, refused, run_colmo
+
+from colmo.optimize.__main__ import main as colmo_optimize
 
 RAW_ANSWER = '''Sure! Here is an improved controller. It switches between energy pumping and a PD law:
 
@@ -25,11 +27,16 @@ def optimize(tmp_path, *overrides):
 
 
 def test_mistuned_policy_gains_100_points_with_oneplusone(tmp_path, examples):
-    result = optimize(tmp_path, f"policy_file={examples / 'pendulum_mistuned.py'}", "gfo=oneplusone")
+    # 3 training episodes: measured, +635 (+574 with the default 10, in twice the time)
+    result = optimize(tmp_path, f"policy_file={examples / 'pendulum_mistuned.py'}", "gfo=oneplusone", "task.episodes=3")
     assert result.returncode == 0, result.stderr
     summary = last_json_line(result.stdout)
     assert summary["evaluations"] == 102  # budget 100, the readable 4-digit code, the referee's final score
-    assert summary["n_params"] == 3 and summary["steps"] > 0 and summary["heldout_score"] is not None
+    assert summary["n_params"] == 3 and summary["heldout_score"] is not None
+    # Racing (on for the (1+1)-ES) stops candidates early: fewer steps than every episode of
+    # every evaluation; the reported score is still over all the episodes.
+    assert summary["raced_out"] > 0 and 0 < summary["steps"] < summary["evaluations"] * 3 * 1000
+    assert len(summary["returns"]) == 3
     assert summary["score"] >= summary["score_initial"] + 100, summary
     assert "score with its own constants" in result.stdout
     assert (next(tmp_path.glob("outputs/optimize/*/*/result.json"))).is_file()
@@ -39,10 +46,12 @@ def test_mistuned_policy_gains_100_points_with_oneplusone(tmp_path, examples):
 
 @pytest.mark.parametrize("method", ["bo", "cma"])
 def test_bo_and_cma_also_improve_it(tmp_path, examples, method):
-    result = optimize(tmp_path, f"policy_file={examples / 'pendulum_mistuned.py'}", f"gfo={method}", "gfo.budget=60", "gfo.workers=2")
+    result = optimize(tmp_path, f"policy_file={examples / 'pendulum_mistuned.py'}", f"gfo={method}", "gfo.budget=60", "gfo.workers=2", "task.episodes=3")
     assert result.returncode == 0, result.stderr
     summary = last_json_line(result.stdout)
-    assert summary["score"] > summary["score_initial"] + 50, summary
+    assert summary["score"] > summary["score_initial"] + 50, summary  # measured: bo +650, cma +191
+    if method == "bo":  # no racing (BO models the values): every evaluation simulates every episode
+        assert summary["steps"] == summary["evaluations"] * 3 * 1000 and summary["raced_out"] == 0
 
 
 def test_raw_model_answer_is_extracted(tmp_path):
@@ -80,14 +89,13 @@ def test_a_failing_policy_is_reported_not_crashed(tmp_path):
         (["task.spec=/no/such/spec.py"], "spec file not found"),
     ],
 )
-def test_user_errors_end_in_one_line_and_exit_2(tmp_path, examples, overrides, message):
+def test_user_errors_end_in_one_line_and_exit_2(tmp_path, monkeypatch, examples, overrides, message):
+    """Checked in process; tests/test_cli.py runs `colmo-optimize` on a bad policy_file."""
     if not any(o.startswith("policy_file") for o in overrides) and overrides:
         overrides = [*overrides, f"policy_file={examples / 'paper_pendulum.py'}"]
-    result = optimize(tmp_path, *overrides)
-    assert result.returncode == 2, (result.stdout, result.stderr)
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("colmo: error: "), result.stderr
-    assert message in lines[0]
+    monkeypatch.chdir(tmp_path)
+    code, line = refused(colmo_optimize, *overrides)
+    assert code == 2 and message in line, line
 
 
 @pytest.mark.parametrize(
@@ -98,9 +106,9 @@ def test_user_errors_end_in_one_line_and_exit_2(tmp_path, examples, overrides, m
         ("import os\ndef policy(obs):\n    return os.getpid()\n", "forbidden: import os"),
     ],
 )
-def test_unusable_policy_files_exit_2(tmp_path, content, message):
+def test_unusable_policy_files_exit_2(tmp_path, monkeypatch, content, message):
     path = tmp_path / "policy.py"
     path.write_text(content)
-    result = optimize(tmp_path, f"policy_file={path}")
-    assert result.returncode == 2, result.stderr
-    assert len(result.stderr.strip().splitlines()) == 1 and message in result.stderr
+    monkeypatch.chdir(tmp_path)
+    code, line = refused(colmo_optimize, f"policy_file={path}")
+    assert code == 2 and message in line, line

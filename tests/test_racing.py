@@ -128,12 +128,13 @@ def test_a_raced_out_candidate_never_becomes_the_best():
 
 @pytest.fixture(scope="module")
 def pendulum():
-    """Two sandbox workers, the pendulum's calibrated evaluator and the mistuned example program."""
+    """Two sandbox workers, the pendulum's calibrated evaluator on 5 episodes and the mistuned
+    example program."""
     from colmo.executor import LocalExecutor
     from colmo.heldout import task_evaluator
     from colmo.intake import read_policy_file
 
-    cfg = compose("optimize", "task=pendulum", "gfo=oneplusone", "policy_file=unused.py")
+    cfg = compose("optimize", "task=pendulum", "task.episodes=5", "gfo=oneplusone", "policy_file=unused.py")
     with LocalExecutor(2) as executor:
         spec, evaluator = task_evaluator(cfg.task, cfg.executor, executor, seed=0)
         program = read_policy_file(str(EXAMPLES / "pendulum_mistuned.py"), spec.allowed_imports)
@@ -169,7 +170,9 @@ def test_an_evaluation_spread_over_workers_reports_their_time(pendulum):
     assert spread.seconds > 0  # the two parts' time (it was dropped: 0)
 
 
+@pytest.mark.slow
 def test_colmo_optimize_reports_the_steps_simulated(tmp_path):
+    """tests/test_optimize_cli.py checks the same figures on its oneplusone (racing) and bo (no racing) runs."""
     common = (f"policy_file={EXAMPLES / 'pendulum_mistuned.py'}", "gfo.budget=10", "task.episodes=3", "evaluation.episodes=3", "executor.workers=2")
     off = run_colmo("colmo.optimize", *common, "gfo.racing=false", cwd=tmp_path)
     on = run_colmo("colmo.optimize", *common, cwd=tmp_path)  # racing: on by default for the (1+1)-ES
