@@ -222,10 +222,12 @@ BATCH_LOG = re.compile(r"batch (\d+): samples")
 
 def test_recorded_terminal_session(tmp_path):
     # Batches of 2 programs, one batch at a time, each program tuned with 20 candidates: a
-    # batch takes seconds, the display redraws twice a second.
+    # batch takes seconds, the display redraws twice a second. The finish logs its held-out
+    # scores under the display (no video or simplification: they log the same way, slower).
     args = [
         "task=pendulum", "tracker=none", "seed=0", "gfo.budget=20", "search.max_samples=6", "llm.batch_size=2",
         "search.queue_size=1", "executor.workers=2", "evaluation.episodes=5", "evaluation.top=1",
+        "evaluation.render=false", "evaluation.simplify=false",
     ]
     session = record_session(args, tmp_path)
 

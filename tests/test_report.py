@@ -8,14 +8,16 @@ import tempfile
 from pathlib import Path
 
 import pytest
-from conftest import compose, run_colmo
+from conftest import compose, refused, run_colmo
 from mlflow.entities import Metric
 from PIL import Image
 
 from colmo.errors import ConfigError
 from colmo.report import AXES, default_out, mean_std, read_runs
+from colmo.report.__main__ import main as report_app
 from colmo.report.__main__ import make_report
 from colmo.track import flatten, open_experiment
+from colmo.track.backend import log_params
 
 START = 1_700_000_000_000  # ms; runs start a minute apart, in the order they are logged
 
@@ -37,8 +39,6 @@ def log_run(client, experiment_id, index: int, run: Logged, *overrides: str, sta
     )
     run_id = mlflow_run.info.run_id
     params = flatten(dataclasses.asdict(cfg)) | {"spec.observation_size": "3", "spec.action_size": "1"}
-    for key, value in params.items():
-        client.log_param(run_id, key, value)
     metrics = []
     for batch, best in enumerate(run.best):
         step = 4 * (batch + 1)
@@ -48,6 +48,7 @@ def log_run(client, experiment_id, index: int, run: Logged, *overrides: str, sta
         metrics += [Metric(key, value, START, step) for key, value in values.items()]
     if run.heldout is not None:
         metrics.append(Metric("best_heldout_score", run.heldout, START, 8))
+    log_params(client, run_id, params)  # as colmo's tracker logs them: in batches, not a transaction each
     client.log_batch(run_id, metrics=metrics)
     with tempfile.TemporaryDirectory() as scratch:
         policy = Path(scratch) / "best_policy.py"
@@ -179,20 +180,22 @@ def test_by_default_best_so_far_is_drawn_against_model_calls_and_against_seconds
             assert image.format == "PNG"
 
 
-def test_bad_command_lines_fail_in_one_line(store, tmp_path):
+def test_bad_command_lines_fail_in_one_line(store, tmp_path, monkeypatch):
     cwd, _ = store
-    for where, args, message in (
-        (cwd, ["experiment=nope"], "no MLflow experiment named 'nope'"),
+    run = run_colmo("colmo.report", "experiment=nope", cwd=cwd)  # found out once the report runs
+    errors = [line for line in run.stderr.splitlines() if line.startswith("colmo: error: ")]
+    assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
+    assert len(errors) == 1 and "no MLflow experiment named 'nope'" in errors[0], run.stderr
+    for where, args, message in (  # refused before Hydra starts: checked in process
         (cwd, ["experiment=pendulum", "axis=hours"], "axis must be one or more of samples, evaluations, seconds"),
         (tmp_path, ["experiment=pendulum"], "no tracking database"),
         (tmp_path, ["out=x"], "missing value for experiment"),
         (tmp_path, ["colour=red"], "Key 'colour' not in 'ReportConfig'"),
         (cwd, ["experiment=pendulum,cheetah"], "experiment=pendulum,cheetah is a sweep: add -m"),
     ):
-        run = run_colmo("colmo.report", *args, cwd=where)
-        errors = [line for line in run.stderr.splitlines() if line.startswith("colmo: error: ")]
-        assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
-        assert len(errors) == 1 and message in errors[0], run.stderr
+        monkeypatch.chdir(where)
+        code, line = refused(report_app, *args)
+        assert code == 2 and message in line, (args, line)
 
 
 def test_mean_std_is_the_sample_std_and_a_lone_mean():
