@@ -22,7 +22,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
-from conftest import last_json_line, unavailable
+from conftest import last_json_line, refused, unavailable
 from PIL import Image
 
 from colmo import trace as trace_module
@@ -33,6 +33,7 @@ from colmo.evaluation import FAST, REFEREE, Evaluator
 from colmo.executor import LocalExecutor
 from colmo.program import parametrize
 from colmo.render import PLOT_FILE, EpisodeMedia, gl, render_episode, render_policy
+from colmo.render.__main__ import main as colmo_render
 from colmo.render.gl import NoGLError
 from colmo.render.plot import plot_episode
 from colmo.render.video import default_camera, render_video, video_frame_steps
@@ -477,14 +478,17 @@ def test_falls_back_to_osmesa_and_renders(tmp_path):
 # --- python -m colmo.render --------------------------------------------------------------------
 
 
+# A short pendulum episode: 150 steps (3 s), a small video, time limits calibrated on one training episode.
+SHORT_EPISODE = ("task=pendulum", "steps=150", "width=160", "height=120", "task.episodes=1")
+
+
 def run_render(*overrides: str, cwd: Path, env: dict | None = None) -> subprocess.CompletedProcess:
-    """`python -m colmo.render` on a short pendulum episode: 150 steps (3 s), a small video,
-    time limits calibrated on one training episode."""
-    command = [sys.executable, "-m", "colmo.render", "task=pendulum", "steps=150", "width=160", "height=120", "task.episodes=1", *overrides]
+    """`python -m colmo.render` on `SHORT_EPISODE`."""
+    command = [sys.executable, "-m", "colmo.render", *SHORT_EPISODE, *overrides]
     return subprocess.run(command, cwd=cwd, env=env, capture_output=True, text=True, timeout=300)
 
 
-def test_cli_writes_a_video_and_a_plot_and_never_overwrites(tmp_path, gl_backend):
+def test_cli_writes_a_video_and_a_plot_and_never_overwrites(tmp_path, monkeypatch, gl_backend):
     policy_file = tmp_path / "swing_up.py"
     policy_file.write_text(SWING_UP)
     out = tmp_path / "media"
@@ -497,9 +501,9 @@ def test_cli_writes_a_video_and_a_plot_and_never_overwrites(tmp_path, gl_backend
     assert frames == 76 and seconds >= 3.0  # every other 20 ms step of 150, at 25 frames per second
     with Image.open(report["plot"]) as image:
         assert image.format == "PNG"
-    again = run_render(f"policy_file={policy_file}", f"out={out}", cwd=tmp_path)
-    assert again.returncode == 2 and again.stdout == ""
-    assert again.stderr.strip() == f"colmo: error: out={out} already holds {PLOT_FILE}: choose a new directory (nothing is overwritten)"
+    monkeypatch.chdir(tmp_path)  # the same command again, refused before it runs: checked in process
+    again = refused(colmo_render, *SHORT_EPISODE, f"policy_file={policy_file}", f"out={out}")
+    assert again == (2, f"colmo: error: out={out} already holds {PLOT_FILE}: choose a new directory (nothing is overwritten)")
 
 
 def test_cli_without_gl_writes_the_plot_into_the_run_directory(tmp_path):
