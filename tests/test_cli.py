@@ -15,7 +15,8 @@ from conftest import refused
 from mlflow import MlflowClient
 
 from colmo.__main__ import main as colmo
-from colmo.cli import help_text, refusal
+from colmo.cli import refusal
+from colmo.help import help_text
 
 BIN = Path(sys.executable).parent
 TINY = ("search.max_samples=2", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false",

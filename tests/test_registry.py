@@ -8,11 +8,11 @@ from __future__ import annotations
 import pytest
 from conftest import compose
 
-from colmo.cli import help_text
 from colmo.config import ExecutorConfig, GFOConfig, TrackerConfig
 from colmo.errors import ConfigError
 from colmo.evaluation import Evaluation
 from colmo.executor import EXECUTORS, LocalExecutor, make_executor
+from colmo.help import help_text
 from colmo.optimize.methods import METHODS, EvaluateOnce
 from colmo.optimize.tune import tune
 from colmo.registry import Registry

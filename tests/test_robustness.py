@@ -10,11 +10,11 @@ import pytest
 from conftest import compose, last_json_line, run_colmo
 from mlflow import MlflowClient
 
-from colmo.cli import help_text
 from colmo.config import HeldoutConfig, PerturbConfig
 from colmo.environments.perturb import PerturbedEnvironment, with_perturbation
 from colmo.errors import ConfigError
 from colmo.finish import RefereeCost, plan_finish
+from colmo.help import help_text
 from colmo.rollout import episode_seeds, evaluate_policy
 from colmo.specs import load_spec
 from colmo.store import run_settings
