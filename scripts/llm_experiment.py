@@ -271,7 +271,14 @@ def report_lines(variants: dict[str, list[Run]], unfinished: list[str], command:
                 f"{r.best:.1f} | {heldout} | {r.calls_to_target if r.calls_to_target is not None else '—'} | {r.summary['seconds']:.0f} |"
             )
     names = list(variants)
-    if len(names) == 2:
+    if len(names) == 2 and min(len(runs) for runs in variants.values()) < 2:
+        first, second = (variants[name] for name in names)
+        difference = np.mean([r.best for r in second]) - np.mean([r.best for r in first])
+        lines += [
+            "", "## Difference of final bests", "",
+            f"{names[1]} − {names[0]}: {difference:+.1f}; no interval: a variant has one finished seed, and one seed says nothing of the spread.",
+        ]
+    elif len(names) == 2:
         first, second = (variants[name] for name in names)
         difference, low, high = bootstrap_difference([r.best for r in first], [r.best for r in second])
         coarse = " (coarse: few seeds a variant)" if min(len(first), len(second)) < 5 else ""

@@ -107,3 +107,11 @@ def test_the_model_call_yield_is_read_from_every_runs_store_over_its_first_calls
     assert "| gfo-oneplusone | 0 | 50 | 32 | 64.0 | 31 | 64.6 |" in markdown
     assert "| gfo-oneplusone | 1 | 20 | 20 | 100.0 | — | — |" in markdown
     assert "gfo-oneplusone: 64.6 per 100 of the first 48 calls over 1 seeds (s0 64.6)" in markdown
+
+
+def test_one_finished_seed_a_variant_gives_a_difference_but_no_interval(tmp_path):
+    write_run(tmp_path / "gfo-none" / "s0", 0, 50.0)
+    write_run(tmp_path / "gfo-oneplusone" / "s0", 0, 250.0)
+    markdown = llm_experiment.write_report(tmp_path, tmp_path / "report.md", "report").read_text()
+    assert "gfo-oneplusone − gfo-none: +200.0; no interval" in markdown and "bootstrap interval" not in markdown
+
