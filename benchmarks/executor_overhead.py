@@ -13,13 +13,13 @@ of workers, before the rounds; each round runs both back to back, in alternating
 
 from __future__ import annotations
 
-import argparse
 import concurrent.futures
 import dataclasses
-import os
 import statistics
 import time
 from pathlib import Path
+
+from common import argument_parser, parse_arguments
 
 from colmo.config import ExecutorConfig, GFOConfig, RayExecutorConfig
 from colmo.evaluation import Evaluator, Executor
@@ -30,7 +30,6 @@ from colmo.rollout import episode_seeds
 from colmo.specs import load_spec
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-MENAGERIE = Path(__file__).resolve().parent.parent.parent / "shared" / "menagerie"
 PROGRAMS = 16
 
 
@@ -58,14 +57,10 @@ def run_round(executor: Executor, programs: list[ParametricProgram], gfo: GFOCon
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argument_parser(__doc__, tasks=False, rounds=3, episodes=10)
     parser.add_argument("--workers", type=int, default=2, help="workers of each executor (local processes, Ray actors)")
-    parser.add_argument("--rounds", type=int, default=3, help="alternating rounds; medians are reported")
     parser.add_argument("--budget", type=int, default=10, help="GFO budget per program")
-    parser.add_argument("--episodes", type=int, default=10, help="episodes per evaluation")
-    args = parser.parse_args()
-    if "MENAGERIE_ROOT" not in os.environ and MENAGERIE.is_dir():
-        os.environ["MENAGERIE_ROOT"] = str(MENAGERIE)
+    args = parse_arguments(parser)
 
     programs = workload()
     gfo = GFOConfig(method="oneplusone", budget=args.budget)

@@ -25,7 +25,6 @@ median tuned score with racing relative to without.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import os
 import queue
@@ -35,6 +34,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from common import TASKS, argument_parser, parse_arguments
 
 from colmo.cli import compose
 from colmo.config import ExecutorConfig, GFOConfig, TaskConfig
@@ -46,8 +46,6 @@ from colmo.program import ParametricProgram, parametrize
 
 REPO = Path(__file__).resolve().parent.parent
 EXAMPLES = REPO / "examples"
-MENAGERIE = REPO.parent / "shared" / "menagerie"
-TASKS = ("pendulum", "ball_in_cup", "cheetah", "quadruped", "a1")
 SEED = 0  # run seed: the training episodes
 _CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 
@@ -168,15 +166,12 @@ HEADER = (
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--tasks", nargs="+", choices=TASKS, default=list(TASKS), help="tasks to run (default: all five)")
+    parser = argument_parser(__doc__)
     parser.add_argument("--programs", type=int, default=5, help="mistuned programs per task")
     parser.add_argument("--workers", type=int, default=2, help="lanes, each a one-worker executor")
     parser.add_argument("--budget", type=int, default=100, help="GFO budget per program")
     parser.add_argument("--verbose", action="store_true", help="a line per tuned program")
-    args = parser.parse_args()
-    if "MENAGERIE_ROOT" not in os.environ and MENAGERIE.is_dir():
-        os.environ["MENAGERIE_ROOT"] = str(MENAGERIE)
+    args = parse_arguments(parser)
 
     start = time.perf_counter()
     lanes = [Lane(ExecutorConfig().memory_mb) for _ in range(args.workers)]

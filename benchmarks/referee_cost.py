@@ -23,24 +23,21 @@ measure the share of a core the scheduler gives; CPU time is what the code costs
 
 from __future__ import annotations
 
-import argparse
-import os
 import statistics
-import struct
 import time
 from pathlib import Path
+
+from common import argument_parser, paired_referee, parse_arguments
 
 from colmo.evaluation import FAST, REFEREE, EvalRequest
 from colmo.executor import LocalExecutor
 from colmo.program import parametrize
 from colmo.rollout import episode_seeds, evaluate_program
 from colmo.sandbox.namespace import Program, compile_or_explain, template
-from colmo.sandbox.referee import LOCKSTEP, referee_evaluation, serve_policy
+from colmo.sandbox.referee import LOCKSTEP
 from colmo.specs import load_spec
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-MENAGERIE = Path(__file__).resolve().parent.parent.parent / "shared" / "menagerie"
-TASKS = ("pendulum", "ball_in_cup", "cheetah", "quadruped", "a1")
 
 
 def measure_task(executor: LocalExecutor, task: str, seeds: tuple[int, ...], rounds: int) -> dict[str, list[float]]:
@@ -88,28 +85,7 @@ def cpu_seconds(task: str, seeds: tuple[int, ...], rounds: int) -> dict[str, lis
         return time.process_time() - start
 
     def refereed() -> tuple[float, float]:
-        observations_read, observations_write = os.pipe()
-        actions_read, actions_write = os.pipe()
-        child_read, child_write = os.pipe()  # the child's CPU seconds, once it is done
-        pid = os.fork()
-        if not pid:
-            for fd in (observations_write, actions_read, child_read):
-                os.close(fd)
-            start = time.process_time()
-            serve_policy(request, envs[0].action_size, observations_read, actions_write)
-            os.write(child_write, struct.pack("<d", time.process_time() - start))
-            os._exit(0)
-        for fd in (observations_read, actions_write, child_write):
-            os.close(fd)
-        start = time.process_time()
-        evaluation = referee_evaluation(envs, request, actions_read, observations_write, time.monotonic() + 3600)
-        worker = time.process_time() - start
-        assert evaluation.failure is None, evaluation.failure
-        for fd in (actions_read, observations_write):
-            os.close(fd)
-        (child,) = struct.unpack("<d", os.read(child_read, 8))
-        os.close(child_read)
-        os.waitpid(pid, 0)
+        worker, child, _ = paired_referee(envs, request)
         return worker, child
 
     fast(), refereed()  # warm-up: initial states cached, templates built
@@ -123,15 +99,10 @@ def cpu_seconds(task: str, seeds: tuple[int, ...], rounds: int) -> dict[str, lis
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--tasks", nargs="+", default=TASKS, choices=TASKS)
-    parser.add_argument("--rounds", type=int, default=5)
-    parser.add_argument("--episodes", type=int, default=10)
+    parser = argument_parser(__doc__, rounds=5, episodes=10)
     parser.add_argument("--budget", type=int, default=100, help="fast evaluations per tuned program")
     parser.add_argument("--cpu", action="store_true", help="also the CPU time of the fast path and of the referee's two processes, unconfined")
-    args = parser.parse_args()
-    if "MENAGERIE_ROOT" not in os.environ and MENAGERIE.is_dir():
-        os.environ["MENAGERIE_ROOT"] = str(MENAGERIE)
+    args = parse_arguments(parser)
     seeds = tuple(episode_seeds(0, args.episodes))
     rows = []
     with LocalExecutor(1) as executor:

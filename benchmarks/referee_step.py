@@ -22,10 +22,8 @@ policies`; what changing processes costs is `paired - alone` on each side.
 
 from __future__ import annotations
 
-import argparse
 import os
 import statistics
-import struct
 import tempfile
 import threading
 import time
@@ -33,6 +31,7 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+from common import argument_parser, paired_referee, parse_arguments
 
 from colmo.evaluation import REFEREE, EvalRequest
 from colmo.program import parametrize
@@ -42,8 +41,6 @@ from colmo.sandbox.referee import LOCKSTEP, referee_evaluation, serve_policy
 from colmo.specs import load_spec
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-MENAGERIE = Path(__file__).resolve().parent.parent.parent / "shared" / "menagerie"
-TASKS = ("pendulum", "ball_in_cup", "cheetah", "quadruped", "a1")
 
 
 def _relay(source: int, target: int, copy: bytearray) -> None:
@@ -88,6 +85,7 @@ class Setup:
                 seen.append(obs.copy())
                 taken.append(np.asarray(policy(obs), dtype=np.float64).reshape(-1))
                 return taken[-1]
+
             return recorded
 
         new_policy = recording if not self.actions else program.new_policy
@@ -96,7 +94,7 @@ class Setup:
 
     def simulator(self) -> None:
         for first in range(0, len(self.seeds), len(self.envs)):
-            batch = list(zip(self.envs, self.seeds[first:first + len(self.envs)]))
+            batch = list(zip(self.envs, self.seeds[first : first + len(self.envs)]))
             for env, seed in batch:
                 env.reset(seed)
             for step in range(self.envs[0].horizon):
@@ -120,8 +118,10 @@ class Setup:
             os._exit(0)
         os.close(to_child[0])
         os.close(from_child[1])
-        relays = [threading.Thread(target=_relay, args=(from_worker[0], to_child[1], self.to_child)),
-                  threading.Thread(target=_relay, args=(from_child[0], to_worker[1], self.to_worker))]
+        relays = [
+            threading.Thread(target=_relay, args=(from_worker[0], to_child[1], self.to_child)),
+            threading.Thread(target=_relay, args=(from_child[0], to_worker[1], self.to_worker)),
+        ]
         for relay in relays:
             relay.start()
         evaluation = referee_evaluation(self.envs, self.request, to_worker[0], from_worker[1], time.monotonic() + 3600)
@@ -150,30 +150,6 @@ class Setup:
             os.close(read_fd)
             os.close(write_fd)
 
-    def paired(self) -> tuple[float, float, float]:
-        """CPU seconds of the worker and of the child, and the wall seconds of the exchange."""
-        observations_read, observations_write = os.pipe()
-        actions_read, actions_write = os.pipe()
-        child_read, child_write = os.pipe()  # the child's CPU seconds, once it is done
-        pid = os.fork()
-        if not pid:
-            start = time.process_time()
-            serve_policy(self.request, self.envs[0].action_size, observations_read, actions_write)
-            os.write(child_write, struct.pack("<d", time.process_time() - start))
-            os._exit(0)
-        for fd in (observations_read, actions_write, child_write):
-            os.close(fd)
-        wall, start = time.perf_counter(), time.process_time()
-        evaluation = referee_evaluation(self.envs, self.request, actions_read, observations_write, time.monotonic() + 3600)
-        worker, wall = time.process_time() - start, time.perf_counter() - wall
-        assert evaluation.failure is None, evaluation.failure
-        for fd in (actions_read, observations_write):
-            os.close(fd)
-        (child,) = struct.unpack("<d", os.read(child_read, 8))
-        os.close(child_read)
-        os.waitpid(pid, 0)
-        return worker, child, wall
-
 
 def measure(setup: Setup, rounds: int, directory: str) -> dict[str, list[float]]:
     """CPU seconds per evaluation of each part (module docstring), over alternating rounds."""
@@ -181,8 +157,11 @@ def measure(setup: Setup, rounds: int, directory: str) -> dict[str, list[float]]
     Path(answers).write_bytes(setup.to_worker)
     Path(frames).write_bytes(setup.to_child)
     parts: dict[str, Callable[[], None]] = {
-        "fast": setup.fast, "simulator": setup.simulator, "policies": setup.policies,
-        "worker alone": lambda: setup.worker_alone(answers), "child alone": lambda: setup.child_alone(frames),
+        "fast": setup.fast,
+        "simulator": setup.simulator,
+        "policies": setup.policies,
+        "worker alone": lambda: setup.worker_alone(answers),
+        "child alone": lambda: setup.child_alone(frames),
     }
     times: dict[str, list[float]] = {name: [] for name in [*parts, "worker paired", "child paired", "paired wall", "fast wall"]}
     for index in range(rounds + 1):  # the first round warms up
@@ -193,7 +172,7 @@ def measure(setup: Setup, rounds: int, directory: str) -> dict[str, list[float]]
                 times[name].append(time.process_time() - start)
                 if name == "fast":
                     times["fast wall"].append(time.perf_counter() - wall)
-        worker, child, wall = setup.paired()
+        worker, child, wall = paired_referee(setup.envs, setup.request)
         if index:
             times["worker paired"].append(worker)
             times["child paired"].append(child)
@@ -202,16 +181,13 @@ def measure(setup: Setup, rounds: int, directory: str) -> dict[str, list[float]]
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--tasks", nargs="+", default=TASKS, choices=TASKS)
-    parser.add_argument("--rounds", type=int, default=9)
-    parser.add_argument("--episodes", type=int, default=10)
-    args = parser.parse_args()
-    if "MENAGERIE_ROOT" not in os.environ and MENAGERIE.is_dir():
-        os.environ["MENAGERIE_ROOT"] = str(MENAGERIE)
+    parser = argument_parser(__doc__, rounds=9, episodes=10)
+    args = parse_arguments(parser)
     print(f"µs per lockstep step, CPU unless said, medians of {args.rounds} alternating rounds, load {os.getloadavg()[0]:.1f}:\n")
-    print("| task | simulator | policies | worker alone (its Python) | child alone (its Python) | worker paired (switching) "
-          "| child paired (switching) | referee CPU / fast CPU | paired wall / fast wall |")
+    print(
+        "| task | simulator | policies | worker alone (its Python) | child alone (its Python) | worker paired (switching) "
+        "| child paired (switching) | referee CPU / fast CPU | paired wall / fast wall |"
+    )
     print("|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as directory:
         for task in args.tasks:
@@ -219,13 +195,16 @@ def main() -> None:
             times = measure(setup, args.rounds, directory)
             per_step = {name: statistics.median(values) / setup.steps * 1e6 for name, values in times.items()}
             referee = statistics.median(w + c for w, c in zip(times["worker paired"], times["child paired"]))
-            print(f"| {task} | {per_step['simulator']:.1f} | {per_step['policies']:.1f} "
-                  f"| {per_step['worker alone']:.1f} ({per_step['worker alone'] - per_step['simulator']:+.1f}) "
-                  f"| {per_step['child alone']:.1f} ({per_step['child alone'] - per_step['policies']:+.1f}) "
-                  f"| {per_step['worker paired']:.1f} ({per_step['worker paired'] - per_step['worker alone']:+.1f}) "
-                  f"| {per_step['child paired']:.1f} ({per_step['child paired'] - per_step['child alone']:+.1f}) "
-                  f"| {referee / statistics.median(times['fast']):.2f}x "
-                  f"| {statistics.median(times['paired wall']) / statistics.median(times['fast wall']):.2f}x |", flush=True)
+            print(
+                f"| {task} | {per_step['simulator']:.1f} | {per_step['policies']:.1f} "
+                f"| {per_step['worker alone']:.1f} ({per_step['worker alone'] - per_step['simulator']:+.1f}) "
+                f"| {per_step['child alone']:.1f} ({per_step['child alone'] - per_step['policies']:+.1f}) "
+                f"| {per_step['worker paired']:.1f} ({per_step['worker paired'] - per_step['worker alone']:+.1f}) "
+                f"| {per_step['child paired']:.1f} ({per_step['child paired'] - per_step['child alone']:+.1f}) "
+                f"| {referee / statistics.median(times['fast']):.2f}x "
+                f"| {statistics.median(times['paired wall']) / statistics.median(times['fast wall']):.2f}x |",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":
