@@ -85,6 +85,10 @@ class TimeBudget:
         self._finish_seconds = 0.0  # the finish's plan at the workers' current speed
         self._available = 0.0  # for the finish, at the calibration's speed
 
+    def elapsed(self) -> float:
+        """Seconds since the search started in this process (a resumed run's limit is its own)."""
+        return time.perf_counter() - self.start
+
     @property
     def limit_seconds(self) -> float:
         """The run's time limit counted from the search's start; 0 without one."""

@@ -48,6 +48,7 @@ class Snapshot:
     max_seconds: float  # the run's time limit, counted from the search's start
     stop_at_score: Optional[float]
     estimated_seconds: Optional[float] = None  # the search by max_samples, from the starter's calibration
+    resumed_samples: int = 0  # model calls an earlier process of a resumed run settled: not in this one's rate
 
     @property
     def evaluations_per_second(self) -> float:
@@ -61,7 +62,8 @@ class Snapshot:
         tells yet (no sample settled, no estimate and no time limit)."""
         if self.stop_at_score is not None and self.best is not None and self.best >= self.stop_at_score:
             return 0.0, "stop_at_score"
-        rate = self.samples / self.elapsed if self.elapsed and self.samples else 0.0
+        settled_here = self.samples - self.resumed_samples
+        rate = settled_here / self.elapsed if self.elapsed and settled_here else 0.0
         by_samples = max(self.max_samples - self.samples, 0) / rate if rate else None
         if by_samples is None and self.estimated_seconds is not None:
             by_samples = max(self.estimated_seconds - self.elapsed, 0.0)
@@ -123,11 +125,11 @@ def snapshot(search: "Search") -> Snapshot:
         samples=totals.samples, max_samples=limits.max_samples, in_flight=search.in_flight_samples,
         programs_evaluated=totals.programs_evaluated,
         # The executor's counts move with every evaluation; the totals' with every integrated batch.
-        evaluations=executor.evaluations_done, steps=executor.steps_done, elapsed=totals.seconds,
+        evaluations=executor.evaluations_done, steps=executor.steps_done, elapsed=search.budget.elapsed(),
         best=search.database.best.score if search.database else None,
         generator_busy=totals.generator_busy, evaluator_busy=totals.evaluator_busy,
         max_seconds=search.budget.limit_seconds, stop_at_score=limits.stop_at_score,
-        estimated_seconds=search.budget.estimated_seconds,
+        estimated_seconds=search.budget.estimated_seconds, resumed_samples=search.resumed_samples,
     )
 
 

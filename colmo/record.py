@@ -16,7 +16,7 @@ from __future__ import annotations
 import collections
 import math
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, astuple, dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Optional, Protocol
 
 from colmo.generate.base import Generation
@@ -189,6 +189,21 @@ class Summary(Totals):
         return asdict(self)
 
 
+@dataclass(frozen=True)
+class Elapsed:
+    """The time a run has taken: wall-clock seconds, the generator's busy seconds and the
+    evaluation workers' busy seconds (summed over workers). A resumed run adds its process's time
+    to what the store says the earlier processes took, so its summary, batch reports and
+    per-second plots count the whole run."""
+
+    seconds: float = 0.0
+    generator_seconds: float = 0.0
+    evaluator_seconds: float = 0.0
+
+    def plus(self, other: Elapsed) -> Elapsed:
+        return Elapsed(*(mine + theirs for mine, theirs in zip(astuple(self), astuple(other))))
+
+
 @dataclass
 class Counters:
     """Running sums over the samples integrated so far, from which `totals` makes the numbers
@@ -213,9 +228,8 @@ class Counters:
         self.completion_tokens += record.completion_tokens
         self.generation_seconds += record.generation_seconds
 
-    def totals(self, seconds: float, generator_seconds: float, evaluator_seconds: float, workers: int) -> Totals:
-        """The reports' numbers after `seconds` of wall time, of which the generator was busy
-        `generator_seconds` and the `workers` evaluation workers `evaluator_seconds` together.
+    def totals(self, elapsed: Elapsed, workers: int) -> Totals:
+        """The reports' numbers after `elapsed`, with `workers` evaluation workers.
         The valid program rate is the share of new programs (duplicates and interrupted samples
         aside) that could be read, passed the static check and ran."""
         status = self.by_status
@@ -225,8 +239,8 @@ class Counters:
             unusable_outputs=status[UNUSABLE], interrupted=status[INTERRUPTED], evaluations=self.evaluations, steps=self.steps,
             valid_program_rate=_ratio(status[EVALUATED], judged), duplicate_rate=_ratio(self.duplicate_answers, self.samples),
             tokens_per_second=_ratio(self.completion_tokens, self.generation_seconds),
-            evaluations_per_second=_ratio(self.evaluations, seconds), generator_busy=_ratio(generator_seconds, seconds),
-            evaluator_busy=_ratio(evaluator_seconds, seconds * workers), seconds=seconds,
+            evaluations_per_second=_ratio(self.evaluations, elapsed.seconds), generator_busy=_ratio(elapsed.generator_seconds, elapsed.seconds),
+            evaluator_busy=_ratio(elapsed.evaluator_seconds, elapsed.seconds * workers), seconds=elapsed.seconds,
         )
 
 

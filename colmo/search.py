@@ -61,6 +61,7 @@ from colmo.record import (
     TO_EVALUATE_AGAIN,
     BatchReport,
     Counters,
+    Elapsed,
     Sample,
     SampleRecord,
     SearchObserver,
@@ -100,12 +101,14 @@ class Search:
         self.spec: Spec = load_task_spec(cfg.task.spec)
         self.run_dir = Path(cfg.resume).expanduser().resolve() if cfg.resume else run_dir
         self.store, self.lock = open_run(self.run_dir, run_settings(cfg), resume=bool(cfg.resume))
+        self.earlier = self.store.elapsed()  # a resumed run's time so far, to add this process's to
         self.executor = executor or make_executor(cfg.executor)
         self.generator = generator
         self.probe: Optional[ProgramProbe] = None
         self.counters = Counters()
         self.best_so_far: list[tuple[int, float]] = []
         self.next_sample = self.next_batch = self.in_flight_samples = 0
+        self.resumed_samples = 0  # model calls settled by the earlier processes of a resumed run
         self.generation_seconds = 0.0
         self.stop_reason = ""
         self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=cfg.gfo.tunes_constants)
@@ -152,6 +155,7 @@ class Search:
                 )
             best_program = self.database.best if self.database else None
             summary = best.summary(self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals())
+            self._record_elapsed()
             write_outputs(summary, self.run_dir)
             for observer in self.observers:
                 observer.on_finish(summary)
@@ -206,6 +210,7 @@ class Search:
             self.next_sample, self.next_batch = record.sample + 1, record.batch + 1
         if batch is not None:
             self.database.on_sample(self.counters.samples)
+        self.resumed_samples = self.counters.samples
         if self.counters.samples or to_evaluate:
             log.info("resumed %s: %d samples, best %.2f, %d to evaluate again", self.run_dir, self.counters.samples, self.database.best.score, len(to_evaluate))
         return to_evaluate
@@ -304,6 +309,7 @@ class Search:
         if reset:
             log.info("reset islands %s", reset)
         report = self._report(batch)
+        self.store.set_elapsed(self.elapsed())  # a run killed later resumes with its time up to here
         log.info(
             "batch %d: samples %d, programs evaluated %d, best %.2f, gen %.1f s, eval %.1f s, evals/s %.1f",
             batch.index, report.samples, report.programs_evaluated, report.best_score,
@@ -366,6 +372,12 @@ class Search:
         self.generation_thread.shutdown(wait=False, cancel_futures=True)
         self.outcomes.shutdown()
 
+    def _record_elapsed(self) -> None:
+        try:
+            self.store.set_elapsed(self.elapsed())
+        except StoreError as error:  # the run ends anyway, its summary says how long it took
+            log.warning("the run's time is not recorded in its store: %s", error)
+
     def _close(self) -> None:
         for resource in (self.generator, self.probe):
             if resource is not None:
@@ -377,10 +389,13 @@ class Search:
 
     # -- reports ---------------------------------------------------------------------------------
 
+    def elapsed(self) -> Elapsed:
+        """The run's time: its earlier processes' (a resumed run) and this one's."""
+        return self.earlier.plus(Elapsed(self.budget.elapsed(), self.generation_seconds, self.executor.busy_seconds))
+
     def totals(self) -> Totals:
         """What the search has done so far, as the progress display, each batch report and the summary say it."""
-        wall = time.perf_counter() - self.budget.start
-        return self.counters.totals(wall, self.generation_seconds, self.executor.busy_seconds, self.executor.n_workers)
+        return self.counters.totals(self.elapsed(), self.executor.n_workers)
 
     def _report(self, batch: _Batch) -> BatchReport:
         return BatchReport(

@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Mapping, Optional
 
 from colmo.errors import ConfigError, RunError
-from colmo.record import TO_EVALUATE_AGAIN, SampleRecord, Summary
+from colmo.record import TO_EVALUATE_AGAIN, Elapsed, SampleRecord, Summary
 
 log = logging.getLogger("colmo.store")
 
@@ -46,6 +46,8 @@ LOCK_FILE = ".colmo.lock"
 
 _SQL_TYPES = {"int": "INTEGER", "float": "REAL", "str": "TEXT", "bool": "INTEGER"}
 _JSON_FIELDS = ("parent_keys", "initial_params", "params", "returns")
+# The run table holds the run's settings, and under this name the time the run has taken (`Elapsed`).
+_ELAPSED = "elapsed"
 
 
 def _column(name: str, annotation: str) -> str:
@@ -107,6 +109,16 @@ class ProgramStore:
 
     def meta(self) -> dict[str, Any]:
         return _run_settings_in(self.connection)
+
+    def elapsed(self) -> Elapsed:
+        """The time the run's earlier processes took (nothing for a new run)."""
+        row = self.connection.execute("SELECT value FROM run WHERE name = ?", (_ELAPSED,)).fetchone()
+        return Elapsed(**json.loads(row[0])) if row else Elapsed()
+
+    def set_elapsed(self, elapsed: Elapsed) -> None:
+        """Record the time the run has taken so far, for a resumed run to add to."""
+        with self._writing():
+            self.connection.execute("INSERT OR REPLACE INTO run(name, value) VALUES (?, ?)", (_ELAPSED, json.dumps(asdict(elapsed))))
 
     def add(self, *records: SampleRecord) -> None:
         """Store samples, all or none; a sample's pending or interrupted row is replaced by its
@@ -246,7 +258,7 @@ def _existing_store(run_dir: Path) -> Path:
 
 
 def _run_settings_in(connection: sqlite3.Connection) -> dict[str, Any]:
-    return {name: json.loads(value) for name, value in connection.execute("SELECT name, value FROM run")}
+    return {name: json.loads(value) for name, value in connection.execute("SELECT name, value FROM run WHERE name != ?", (_ELAPSED,))}
 
 
 def write_outputs(summary: Summary, run_dir: Path) -> None:

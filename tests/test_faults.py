@@ -162,6 +162,31 @@ def test_a_killed_search_keeps_what_was_generated_and_resume_evaluates_it(tmp_pa
     assert any(f"{len(pending)} to evaluate again" in message for message in caplog.messages)
 
 
+def recorded_elapsed(run_dir: Path) -> dict[str, float]:
+    with sqlite3.connect(f"file:{run_dir / 'programs.db'}?mode=ro", uri=True) as connection:
+        (value,) = connection.execute("SELECT value FROM run WHERE name = 'elapsed'").fetchone()
+    return json.loads(value)
+
+
+def test_a_resumed_run_counts_the_time_of_its_earlier_processes(tmp_path):
+    """A run's seconds (summary.json, and the rates and per-second plots made from them) are the
+    whole run's: its store records the time taken after every batch and at the end, and a
+    resumed run adds its own process's time to it, while its time limit stays its own."""
+    overrides = ("gfo=none", *TINY)
+    run_dir = tmp_path / "run"
+    first = Search(compose("search", "search.max_samples=4", *overrides), run_dir).run()
+    assert first.seconds <= recorded_elapsed(run_dir)["seconds"] <= first.seconds + 5
+    started = time.perf_counter()
+    second = resume(run_dir, "search.max_samples=8", *overrides)
+    resume_wall = time.perf_counter() - started
+    assert second.samples == 8
+    # This process's own time is under its wall clock; the earlier process's comes on top.
+    assert first.seconds < second.seconds <= first.seconds + resume_wall
+    assert second.seconds > resume_wall
+    assert recorded_elapsed(run_dir)["seconds"] >= second.seconds
+    assert second.evaluations_per_second == pytest.approx(second.evaluations / second.seconds)
+
+
 def has_run_settings(run_dir: Path) -> bool:
     """The search holds the run directory's lock and has recorded its settings (a resume's input
     check passes): from the moment it opens its store, before any evaluation."""

@@ -22,7 +22,7 @@ import pytest
 from rich.console import Console
 
 from colmo.progress import Snapshot, progress, render
-from colmo.record import DUPLICATE, EVALUATED, Counters
+from colmo.record import DUPLICATE, EVALUATED, Counters, Elapsed
 
 
 def state(**fields) -> Snapshot:
@@ -68,6 +68,8 @@ def test_every_line_of_the_display_fits_in_100_columns():
         ({"best": 950.0, "stop_at_score": 900.0, "max_seconds": 600.0}, 0.0, "stop_at_score", 1.0),  # target reached
         ({"best": 850.0, "stop_at_score": 900.0}, 180.0, "max_samples", 0.4),  # target not reached: the others bind
         ({"best": None, "stop_at_score": 900.0}, 180.0, "max_samples", 0.4),  # no score yet
+        # A resumed run: 30 of its 40 samples were settled before; 10 in this process's 120 s.
+        ({"resumed_samples": 30}, 720.0, "max_samples", 0.4),
     ],
 )
 def test_time_left_against_the_binding_limit(fields, left, limit, fraction):
@@ -97,8 +99,9 @@ def fake_search(max_samples: int = 10, progress_every_s: float = 0.05) -> Simple
     # 3 model calls, one program evaluated; in 10 s the generator was busy 0.5 s, the 2 workers 1 s together.
     counters = Counters(samples=3, records=3, by_status=collections.Counter({EVALUATED: 1, DUPLICATE: 2}))
     return SimpleNamespace(
-        totals=lambda: counters.totals(10.0, 0.5, 1.0, 2), budget=SimpleNamespace(limit_seconds=0.0, estimated_seconds=None),
-        executor=executor, in_flight_samples=2, database=None, cfg=SimpleNamespace(search=limits),
+        totals=lambda: counters.totals(Elapsed(10.0, 0.5, 1.0), 2),
+        budget=SimpleNamespace(limit_seconds=0.0, estimated_seconds=None, elapsed=lambda: 10.0),
+        executor=executor, in_flight_samples=2, resumed_samples=0, database=None, cfg=SimpleNamespace(search=limits),
     )
 
 

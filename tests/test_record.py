@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from colmo.generate import Generation
-from colmo.record import DUPLICATE, EVALUATED, FAILED, INTERRUPTED, PENDING, UNUSABLE, Counters, Sample, SampleRecord
+from colmo.record import DUPLICATE, EVALUATED, FAILED, INTERRUPTED, PENDING, UNUSABLE, Counters, Elapsed, Sample, SampleRecord
 
 
 def sample(index: int, calls: int = 1) -> Sample:
@@ -25,7 +25,7 @@ def test_totals_count_model_calls_records_by_status_and_rates():
     statuses = [(EVALUATED, 3), (EVALUATED, 1), (FAILED, 1), (UNUSABLE, 1), (DUPLICATE, 1), (INTERRUPTED, 1)]
     for index, (status, calls) in enumerate(statuses):
         counters.count(SampleRecord.of(sample(index, calls), status))
-    totals = counters.totals(seconds=10.0, generator_seconds=4.0, evaluator_seconds=15.0, workers=2)
+    totals = counters.totals(Elapsed(seconds=10.0, generator_seconds=4.0, evaluator_seconds=15.0), workers=2)
     assert (totals.samples, totals.programs_evaluated, totals.failures, totals.unusable_outputs) == (8, 2, 1, 1)
     assert (totals.duplicates_skipped, totals.interrupted) == (1, 1)
     assert totals.valid_program_rate == pytest.approx(2 / 4)  # duplicates and interrupted samples aside
@@ -35,5 +35,5 @@ def test_totals_count_model_calls_records_by_status_and_rates():
 
 
 def test_totals_before_anything_happened_are_zeros():
-    totals = Counters().totals(seconds=0.0, generator_seconds=0.0, evaluator_seconds=0.0, workers=2)
+    totals = Counters().totals(Elapsed(), workers=2)
     assert totals.samples == 0 and totals.valid_program_rate == totals.evaluator_busy == totals.evaluations_per_second == 0.0
