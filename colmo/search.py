@@ -22,14 +22,15 @@ Stopping: `search.max_samples`, `search.stop_at_score`, and `search.max_seconds`
 limit of the whole run from the start of the process, with the search's own deadline before it
 (`colmo.budget`: the finish's time and the programs in flight left over). At the search's
 deadline a generation in flight is abandoned and programs in flight stop tuning at their next
-candidate, their best so far scored and stored (`cut_short`). Ctrl-C and SIGTERM
-do the same; a second one cancels the evaluations in flight, whose samples are stored as
-`interrupted` and evaluated when the run is resumed. Nothing evaluated is ever lost.
+candidate, their best so far scored and stored (`cut_short`). Ctrl-C and SIGTERM do the same; a
+second one cancels the evaluations in flight, whose samples are stored as `interrupted` and
+evaluated when the run is resumed. Nothing evaluated is ever lost.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import dataclasses
 import logging
 import threading
@@ -107,8 +108,8 @@ class Search:
         self.probe: Optional[ProgramProbe] = None
         self.counters = Counters()
         self.best_so_far: list[tuple[int, float]] = []
-        self.next_sample = self.next_batch = self.in_flight_samples = 0
-        self.resumed_samples = 0  # model calls settled by the earlier processes of a resumed run
+        # resumed_samples: the model calls an earlier process of a resumed run settled
+        self.next_sample = self.next_batch = self.in_flight_samples = self.resumed_samples = 0
         self.generation_seconds = 0.0
         self.stop_reason = ""
         self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=cfg.gfo.tunes_constants)
@@ -155,7 +156,6 @@ class Search:
                 )
             best_program = self.database.best if self.database else None
             summary = best.summary(self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals())
-            self._record_elapsed()
             write_outputs(summary, self.run_dir)
             for observer in self.observers:
                 observer.on_finish(summary)
@@ -372,16 +372,11 @@ class Search:
         self.generation_thread.shutdown(wait=False, cancel_futures=True)
         self.outcomes.shutdown()
 
-    def _record_elapsed(self) -> None:
-        try:
-            self.store.set_elapsed(self.elapsed())
-        except StoreError as error:  # the run ends anyway, its summary says how long it took
-            log.warning("the run's time is not recorded in its store: %s", error)
-
     def _close(self) -> None:
-        for resource in (self.generator, self.probe):
-            if resource is not None:
-                resource.close()
+        with contextlib.suppress(StoreError):  # a store that failed: the summary has the run's time
+            self.store.set_elapsed(self.elapsed())
+        for resource in filter(None, (self.generator, self.probe)):
+            resource.close()
         if not self.executor.closed:
             self.executor.close()
         self.store.close()
