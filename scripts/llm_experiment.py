@@ -93,6 +93,15 @@ class Run:
     seed: int
     summary: dict
     target: Optional[float]
+    processes: int = 1  # the colmo processes that ran it (a run stopped and resumed: more than one)
+    whole_time: bool = True  # its summary's seconds count every process (colmo records them since 53131fe)
+
+    @property
+    def seconds(self) -> str:
+        """The run's seconds, said to be the last process's alone where the code that ran it
+        counted only that one."""
+        seconds = f"{self.summary['seconds']:.0f}"
+        return seconds if self.whole_time or self.processes == 1 else f"{seconds} (the last of {self.processes} processes)"
 
     @property
     def calls(self) -> int:
@@ -151,8 +160,23 @@ def read_runs(out: Path) -> tuple[dict[str, list[Run]], list[str]]:
         config = yaml.safe_load((run_dir / ".hydra" / "config.yaml").read_text())
         target = config.get("task", {}).get("target_score")
         seed = int(config["seed"])
-        variants.setdefault(run_dir.parent.name, []).append(Run(run_dir.parent.name, seed, summary, target))
+        variants.setdefault(run_dir.parent.name, []).append(Run(run_dir.parent.name, seed, summary, target, *processes_of(run_dir)))
     return variants, unfinished
+
+
+def processes_of(run_dir: Path) -> tuple[int, bool]:
+    """How many colmo processes ran the run (its log's "resumed" lines, plus the first), and
+    whether its store records the time of all of them."""
+    try:
+        resumes = (run_dir / "colmo.log").read_text(errors="replace").count("[colmo.search][INFO] resumed ")
+    except OSError:
+        resumes = 0
+    try:
+        with sqlite3.connect(f"file:{run_dir / STORE_FILE}?mode=ro", uri=True) as store:
+            whole_time = store.execute("SELECT 1 FROM run WHERE name = 'elapsed'").fetchone() is not None
+    except sqlite3.DatabaseError:
+        whole_time = False
+    return 1 + resumes, whole_time
 
 
 @dataclass(frozen=True)
@@ -268,7 +292,7 @@ def report_lines(variants: dict[str, list[Run]], unfinished: list[str], command:
             heldout = "—" if r.heldout is None else f"{r.heldout:.1f}"
             lines.append(
                 f"| {name} | {r.seed} | {r.calls} | {r.evaluated} | {r.duplicate_answers} | {r.failed} | {r.per_100_calls:.1f} | "
-                f"{r.best:.1f} | {heldout} | {r.calls_to_target if r.calls_to_target is not None else '—'} | {r.summary['seconds']:.0f} |"
+                f"{r.best:.1f} | {heldout} | {r.calls_to_target if r.calls_to_target is not None else '—'} | {r.seconds} |"
             )
     names = list(variants)
     if len(names) == 2 and min(len(runs) for runs in variants.values()) < 2:

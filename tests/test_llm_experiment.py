@@ -115,3 +115,25 @@ def test_one_finished_seed_a_variant_gives_a_difference_but_no_interval(tmp_path
     markdown = llm_experiment.write_report(tmp_path, tmp_path / "report.md", "report").read_text()
     assert "gfo-oneplusone − gfo-none: +200.0; no interval" in markdown and "bootstrap interval" not in markdown
 
+
+
+def test_a_resumed_run_whose_store_lacks_the_whole_time_says_its_seconds_are_the_last_process(tmp_path):
+    """Before colmo recorded a run's time in its store, a resumed run's summary counted only its
+    last process: the report says so instead of showing that as the run's time."""
+    from colmo.record import Elapsed
+    from colmo.store import STORE_FILE, ProgramStore
+
+    resumed_log = "[2026-12-03 11:29:59,064][colmo.search][INFO] resumed /runs/gfo-none/s1: 77 samples, best 196.50, 0 to evaluate again\n"
+    for seed, log, recorded in [(0, "", False), (1, resumed_log, False), (2, resumed_log, True)]:
+        run_dir = tmp_path / "gfo-none" / f"s{seed}"
+        write_run(run_dir, seed, 100.0)
+        (run_dir / "programs.db").unlink()
+        store = ProgramStore(run_dir / STORE_FILE)
+        if recorded:
+            store.set_elapsed(Elapsed(seconds=600.0))
+        store.close()
+        (run_dir / "colmo.log").write_text(log)
+    markdown = llm_experiment.write_report(tmp_path, tmp_path / "report.md", "report").read_text()
+    assert "| gfo-none | 0 | 48 | 30 | 12 | 3 | 62.5 | 100.0 | 90.0 | — | 600 |" in markdown  # one process
+    assert "| 600 (the last of 2 processes) |" in markdown  # seed 1: resumed, its store predates the record
+    assert "| gfo-none | 2 | 48 | 30 | 12 | 3 | 62.5 | 100.0 | — | — | 600 |" in markdown  # resumed, the whole time recorded
