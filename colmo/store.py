@@ -112,13 +112,11 @@ class ProgramStore:
 
     def elapsed(self) -> Elapsed:
         """The time the run's earlier processes took (nothing for a new run)."""
-        row = self.connection.execute("SELECT value FROM run WHERE name = ?", (_ELAPSED,)).fetchone()
-        return Elapsed(**json.loads(row[0])) if row else Elapsed()
+        return _elapsed_in(self.connection) or Elapsed()
 
     def set_elapsed(self, elapsed: Elapsed) -> None:
         """Record the time the run has taken so far, for a resumed run to add to."""
-        with self._writing():
-            self.connection.execute("INSERT OR REPLACE INTO run(name, value) VALUES (?, ?)", (_ELAPSED, json.dumps(asdict(elapsed))))
+        self.set_meta({_ELAPSED: asdict(elapsed)})
 
     def add(self, *records: SampleRecord) -> None:
         """Store samples, all or none; a sample's pending or interrupted row is replaced by its
@@ -255,6 +253,22 @@ def _existing_store(run_dir: Path) -> Path:
     if path.stat().st_size == 0:
         raise ConfigError(f"{path} is empty: not a colmo program store")
     return path
+
+
+def recorded_elapsed(path: Path) -> Optional[Elapsed]:
+    """The time a store says its run has taken, read without changing anything; None where it
+    records none (a store from before colmo recorded it). `sqlite3.DatabaseError` if `path` is
+    not a program store."""
+    connection = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+    try:
+        return _elapsed_in(connection)
+    finally:
+        connection.close()
+
+
+def _elapsed_in(connection: sqlite3.Connection) -> Optional[Elapsed]:
+    row = connection.execute("SELECT value FROM run WHERE name = ?", (_ELAPSED,)).fetchone()
+    return Elapsed(**json.loads(row[0])) if row else None
 
 
 def _run_settings_in(connection: sqlite3.Connection) -> dict[str, Any]:

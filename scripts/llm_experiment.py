@@ -44,7 +44,7 @@ from matplotlib.figure import Figure
 from colmo.record import EVALUATED, FINISHED, PENDING
 from colmo.report.figure import COLORS, draw_seeds
 from colmo.report.tables import mean_std
-from colmo.store import STORE_FILE, SUMMARY_FILE
+from colmo.store import STORE_FILE, SUMMARY_FILE, recorded_elapsed
 
 REPORT_FILE = "report.md"
 PLOT_FILE = "best_so_far.png"
@@ -172,8 +172,7 @@ def processes_of(run_dir: Path) -> tuple[int, bool]:
     except OSError:
         resumes = 0
     try:
-        with sqlite3.connect(f"file:{run_dir / STORE_FILE}?mode=ro", uri=True) as store:
-            whole_time = store.execute("SELECT 1 FROM run WHERE name = 'elapsed'").fetchone() is not None
+        whole_time = recorded_elapsed(run_dir / STORE_FILE) is not None
     except sqlite3.DatabaseError:
         whole_time = False
     return 1 + resumes, whole_time
