@@ -76,7 +76,7 @@ def _field_help(schema: type, item: dataclasses.Field) -> str:
     return f"{item.metadata['help']}: one of {config.fields.registry_of(schema, item.name).choices()}"
 
 
-def _program_name(config_name: str) -> str:
+def _program_name() -> str:
     """How the user called the app: its console script, or `python -m colmo...`."""
     main = sys.modules.get("__main__")
     module = getattr(getattr(main, "__spec__", None), "name", None)
@@ -109,7 +109,7 @@ def help_text(config_name: str, summary: str, overrides: list[str], example: Opt
     with open_dict(composed):
         del composed["hydra"]
     root = OmegaConf.get_type(composed)
-    prog = _program_name(config_name)
+    prog = _program_name()
     groups = [name for name in (item.name for item in dataclasses.fields(root)) if name in choices and (resources.files(CONFIG_MODULE) / name).is_dir()]
     lines = [
         f"{prog}: {(root.__doc__ or '').strip().split(': ', 1)[-1]}", *_wrapped(inspect.cleandoc(summary).split("\n\n")[0], 0), "",
