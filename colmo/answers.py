@@ -47,9 +47,10 @@ class AnswerReader:
         return identity(program, by_structure=self.by_structure)
 
     def read(self, generation: Generation) -> Reading:
-        """The program of an answer, or why none could be read."""
+        """The program of an answer, or why none could be read (a chat answer may call what its
+        prompt showed, `Generation.shown`)."""
         try:
-            return self.identified(read_program(generation.text, self.allowed_imports, generation.prefix, self.max_nodes))
+            return self.identified(read_program(generation.text, self.allowed_imports, generation.prefix, self.max_nodes, generation.shown))
         except (Unusable, ForbiddenProgram) as error:
             return error
 

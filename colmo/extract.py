@@ -27,6 +27,10 @@ Rules, in the order they apply:
     without fences, and only a version whose definition ends in the completion can be chosen,
     so a continuation whose body does not parse is rejected instead of falling back to a
     version the prompt showed. The prompt's helpers can be used by the new version.
+  * A chat answer is extracted with `shown=` the code its prompt showed (`Prompt.shown_code`):
+    the answer may call what it saw there (`policy_v1(obs)`, a shown helper) without copying
+    it, as a completion may; the answer's own definitions come after the shown ones, so they
+    win, and the version chosen is always one the answer wrote.
   * Type annotations are dropped (`x: T = v` becomes `x = v`): they do not change what the
     policy computes, and the static check would read them as code.
 The result is formatted by ast.unparse, which drops comments; the caller keeps the raw text.
@@ -63,16 +67,17 @@ class ExtractionError(ValueError):
     """No usable policy in the answer; the message is a one-line reason."""
 
 
-def extract_policy(text: str, function_name: str = "policy", prefix: str = "") -> str:
+def extract_policy(text: str, function_name: str = "policy", prefix: str = "", shown: str = "") -> str:
     """The policy module (imports, helpers, `def policy`) in a language model's answer `text`;
-    for a completion, `prefix` is the prompt text that `text` continues."""
+    for a completion, `prefix` is the prompt text that `text` continues; for a chat answer,
+    `shown` is the code its prompt showed (colmo's own rendering), which the answer may use."""
     try:
-        return _extract(text, function_name, prefix)
+        return _extract(text, function_name, prefix, shown)
     except (RecursionError, MemoryError):  # the parser and AST visitors recurse per nesting level
         raise ExtractionError("the answer is nested too deeply to parse") from None
 
 
-def _extract(text: str, function_name: str, prefix: str) -> str:
+def _extract(text: str, function_name: str, prefix: str, shown: str) -> str:
     version = re.compile(rf"{re.escape(function_name)}(?:_v\d+)?")
     budget = _ParseBudget(prefix + text)
     if prefix:
@@ -87,6 +92,8 @@ def _extract(text: str, function_name: str, prefix: str) -> str:
         if not _versions(statements, version):
             statements = [s for module in _code_regions(text, budget) for s in module.body]
         versions = _versions(statements, version)
+        if shown:  # before the answer's statements: a definition of the answer's replaces a shown one
+            statements = ast.parse(shown).body + statements
     if not versions:
         signature = re.search(rf"^[ \t]*def\s+{version.pattern}\s*\(", text, re.MULTILINE)
         if signature:

@@ -45,16 +45,19 @@ def nesting(text: str) -> int:
     return deepest
 
 
-def read_program(text: str, allowed_imports: Sequence[str], prefix: str = "", max_nodes: Optional[int] = None) -> ParametricProgram:
+def read_program(
+    text: str, allowed_imports: Sequence[str], prefix: str = "", max_nodes: Optional[int] = None, shown: str = "",
+) -> ParametricProgram:
     """The checked parametric program in a generator's output (module docstring); for a
-    completion, `prefix` is the prompt text it continues (colmo's own, so not bounded). A
-    program bigger than `max_nodes` AST nodes (`database.max_nodes`: readability) is refused."""
+    completion, `prefix` is the prompt text it continues, for a chat answer `shown` the code
+    its prompt showed (both colmo's own, so not bounded). A program bigger than `max_nodes`
+    AST nodes (`database.max_nodes`: readability) is refused."""
     if len(text) > MAX_ANSWER_CHARS:
         raise Unusable(f"the output has {len(text)} characters, more than the {MAX_ANSWER_CHARS} allowed")
     if nesting(text) > MAX_NESTING:
         raise Unusable(f"the output nests brackets more than {MAX_NESTING} deep")
     try:
-        program = parametrize(extract_policy(text, prefix=prefix))
+        program = parametrize(extract_policy(text, prefix=prefix, shown=shown))
     except (ExtractionError, ProgramError) as error:
         raise Unusable(str(error)) from None
     tree = parse_program(program.skeleton)

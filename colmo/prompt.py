@@ -14,7 +14,9 @@ copy the last version (most answers of a 1.5B model were copies, docs/llm-duplic
 Helpers the programs define (module-level functions, classes, constants) are shown once,
 above the versions. A helper that differs from one already shown under the same name, or
 that uses such a helper, gets a version suffix (`wrap_v1`) so that every version still calls
-its own helpers. Code is re-rendered with `ast.unparse`, which drops comments.
+its own helpers; so does a helper named like a version (`policy_v0` kept by a program that
+calls it), which the version of that name would otherwise replace. Code is re-rendered with
+`ast.unparse`, which drops comments.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from __future__ import annotations
 import ast
 import copy
 import math
+import re
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -40,6 +43,9 @@ class Prompt:
     text: str  # completion form: ends with the header of the version to write
     messages: list[dict[str, str]]  # chat form: a system and a user message
     programs: list[str]  # the shown programs' code as stored, ascending score
+    # The code shown (imports, helpers, versions policy_v0..) as rendered: what a chat answer may
+    # call without copying it (`colmo.extract`); a completion continues `text`, which holds it.
+    shown_code: str
     island: int
     parent_keys: list[str]
     # Which regeneration of a duplicate answer this prompt asks for (0: a first answer); language
@@ -92,7 +98,8 @@ def build_prompt(
     imports, definitions, versions, args = _render([program.code for program in programs], function_name)
     new, previous = f"{function_name}_v{len(programs)}", f"{function_name}_v{len(programs) - 1}"
     docstring = f'"""{description.strip()}\n\n{_instructions(new, previous, function_name, constants_tuned)}\n"""'
-    context = docstring + "\n\n" + "\n\n\n".join(["\n".join(imports), *definitions, *versions])
+    shown_code = "\n\n\n".join(["\n".join(imports), *definitions, *versions])
+    context = docstring + "\n\n" + shown_code
     header = f'def {new}({args}):\n    """Improved version of {previous}."""\n'
     # The chat form leaves out the header: the instruction asks for the function instead.
     request = (
@@ -107,6 +114,7 @@ def build_prompt(
         text=context + "\n\n\n" + header,
         messages=messages,
         programs=[program.code for program in programs],
+        shown_code=shown_code,
         island=selection.island,
         parent_keys=[program.key for program in programs],
     )
@@ -130,6 +138,10 @@ def _render(codes: list[str], function_name: str) -> tuple[list[str], list[str],
         helpers = [s for s in statements if s not in policies and not is_docstring(s) and not isinstance(s, (ast.Import, ast.ImportFrom))]
 
         renames = {function_name: f"{function_name}_v{version}"}
+        # A helper named like a version (a program that kept the versions it was shown and
+        # calls them) would be replaced by that version: it is shown under a name of its own.
+        for helper in helpers:
+            renames.update({name: f"{name}_v{version}" for name in bound_names(helper) if re.fullmatch(rf"{function_name}_v\d+", name)})
         # Renaming one helper changes the text of the helpers that use it: repeat to a fixpoint.
         changed = True
         while changed:

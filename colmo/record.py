@@ -59,6 +59,7 @@ class SampleRecord:
     generator: str
     raw: str  # the generator's output as it came (a completion's continuation: prompt_prefix + raw)
     prompt_prefix: str = ""
+    prompt_shown: str = ""  # the code a chat answer's prompt showed, which it may call (`Generation.shown`)
     key: Optional[str] = None
     skeleton: Optional[str] = None
     code: Optional[str] = None  # readable code with the final constants inlined
@@ -92,7 +93,7 @@ class SampleRecord:
         generation = sample.generation
         fields: dict[str, Any] = dict(
             sample=sample.index, batch=sample.batch, status=status, island=sample.island, parent_keys=tuple(sample.parent_keys),
-            generator=generation.generator, raw=generation.text, prompt_prefix=generation.prefix,
+            generator=generation.generator, raw=generation.text, prompt_prefix=generation.prefix, prompt_shown=generation.shown,
             generation_seconds=generation.seconds, prompt_tokens=generation.prompt_tokens,
             completion_tokens=generation.completion_tokens, model_calls=generation.calls, failure=failure,
         )
@@ -115,6 +116,7 @@ class SampleRecord:
         """The generated sample this record was made from (`of`'s inverse: a resumed run evaluates it again)."""
         generation = Generation(
             self.raw, self.generator, self.prompt_tokens, self.completion_tokens, self.generation_seconds, self.prompt_prefix, self.model_calls,
+            self.prompt_shown,
         )
         return Sample(self.sample, self.batch, self.island, self.parent_keys, generation)
 

@@ -65,7 +65,10 @@ CREATE INDEX IF NOT EXISTS samples_key ON samples(key);
 """
 # Columns added since the first stores, with the value an older row means: a store written
 # before them is given them when it is opened (resumed or read), its rows keeping their meaning.
-_ADDED_COLUMNS = {"model_calls": "INTEGER NOT NULL DEFAULT 1"}  # one model call per sample then
+_ADDED_COLUMNS = {
+    "model_calls": "INTEGER NOT NULL DEFAULT 1",  # one model call per sample then
+    "prompt_shown": "TEXT NOT NULL DEFAULT ''",  # chat answers were read without the shown code then
+}
 
 
 class StoreError(RunError):

@@ -1,4 +1,5 @@
 import ast
+import math
 import textwrap
 from pathlib import Path
 
@@ -392,6 +393,41 @@ def test_a_newer_version_the_completion_wrote_after_its_body_wins():
 def test_a_completion_without_a_usable_body_never_falls_back_to_a_prompt_version(completion):
     with pytest.raises(ExtractionError, match="the completion holds no complete body of 'policy'"):
         extract_policy(completion, prefix=completion_prompt())
+
+
+def shown_code() -> str:
+    """The code the prompt of `completion_prompt` shows (a chat answer's context)."""
+    from colmo.database import Selection, StoredProgram
+    from colmo.prompt import build_prompt
+
+    helper = "import numpy as np\n\ndef angle(obs):\n    return np.arctan2(obs[1], obs[0])\n\ndef policy(obs):\n    return -2.0 * angle(obs)"
+    programs = [StoredProgram("a", "def policy(obs):\n    return 0.0", 0.0, 0, 0), StoredProgram("b", helper, 1.0, 0, 1)]
+    return build_prompt("Swing the pole up.", Selection(0, programs)).shown_code
+
+
+def test_a_chat_answer_may_call_a_version_its_prompt_showed():
+    # The 1.5B model's chat answers often build on a shown version without copying it
+    # (`policy_v0(obs) + ...`): read without the prompt's code they failed with a NameError.
+    answer = "```python\ndef policy(obs):\n    return 0.5 * policy_v1(obs) - 0.1 * obs[2]\n```"
+    extracted = extract_policy(answer, shown=shown_code())
+    namespace: dict = {}
+    exec(extracted, namespace)  # the program stands alone: the version and its helper came along
+    assert namespace["policy"]([0.0, 1.0, 2.0]) == pytest.approx(0.5 * -2.0 * (math.pi / 2) - 0.2)
+    assert "def policy_v1(obs):" in extracted and "def angle(obs):" in extracted
+    assert "def policy_v0" not in extracted  # what the answer does not use stays out
+    assert extract_policy(answer) == "def policy(obs):\n    return 0.5 * policy_v1(obs) - 0.1 * obs[2]"  # no prompt, no context
+
+
+def test_a_chat_answers_own_definitions_win_over_the_shown_ones():
+    answer = "```python\ndef angle(obs):\n    return obs[1]\n\ndef policy(obs):\n    return -angle(obs)\n```"
+    extracted = extract_policy(answer, shown=shown_code())
+    assert extracted == "def angle(obs):\n    return obs[1]\n\ndef policy(obs):\n    return -angle(obs)"
+
+
+@pytest.mark.parametrize("answer", ["I would keep policy_v1.", "```python\nx = policy_v1\n```"])
+def test_the_shown_code_is_never_the_chosen_policy(answer):
+    with pytest.raises(ExtractionError, match="no function named 'policy'"):
+        extract_policy(answer, shown=shown_code())
 
 
 # ------------------------------------------------------------------------- math module names

@@ -34,11 +34,12 @@ PAPER_PENDULUM = (EXAMPLES / "paper_pendulum.py").read_text()
 MESSAGES = [{"role": "system", "content": "You write policies."}, {"role": "user", "content": "Improve policy_v1."}]
 
 
+SHOWN_CODE = 'import numpy as np\n\n\ndef policy_v0(obs):\n    return 0.0'
 PROMPT_TEXT = 'import numpy as np\n\n\ndef policy_v0(obs):\n    return 0.0\n\n\ndef policy_v1(obs):\n    """Improved version of policy_v0."""\n'
 
 
 def make_prompt(*programs: str, text: str = "") -> Prompt:
-    return Prompt(text=text, messages=MESSAGES, programs=list(programs), island=0, parent_keys=[])
+    return Prompt(text=text, messages=MESSAGES, programs=list(programs), shown_code=SHOWN_CODE, island=0, parent_keys=[])
 
 
 @pytest.fixture(scope="module")
@@ -395,15 +396,17 @@ def test_openai_completion_form_continues_the_prompt_text(server):
     assert request["body"]["prompt"] == PROMPT_TEXT and request["body"]["stop"] == list(COMPLETION_STOP)
     assert request["body"]["n"] == 3 and "messages" not in request["body"]
     assert [g.text for g in generations] == [f"    return {i}.0 * obs[0]\n" for i in range(3)]
-    assert {g.prefix for g in generations} == {PROMPT_TEXT}
+    assert {(g.prefix, g.shown) for g in generations} == {(PROMPT_TEXT, "")}
     assert [g.completion_tokens for g in generations] == [4, 4, 4]
     extracted = extract_policy(generations[2].text, prefix=generations[2].prefix)
     assert extracted == 'def policy(obs):\n    """Improved version of policy_v0."""\n    return 2.0 * obs[0]'
 
 
-def test_chat_generations_continue_nothing(server):
+def test_chat_generations_continue_nothing_and_carry_the_shown_code(server):
+    # A chat answer is read with the code its prompt showed (it may call policy_v0); a
+    # completion continues the prompt text, which holds that code already.
     generator = make_generator(openai_config(server.url), seed=0)
-    assert {g.prefix for g in generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 2)} == {""}
+    assert {(g.prefix, g.shown) for g in generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 2)} == {("", SHOWN_CODE)}
     generator.close()
 
 
@@ -556,7 +559,7 @@ def test_llamacpp_loads_the_model_once_and_samples_the_batch_with_fresh_seeds(fa
     assert len({c["seed"] for c in llm.calls}) == 5
     assert [g.text for g in generations] == [f"def policy(obs):\n    return {i}.0" for i in range(1, 6)]
     assert {g.generator for g in generations} == {"llamacpp:tiny-q4.gguf"}
-    assert {(g.prompt_tokens, g.completion_tokens, g.prefix) for g in generations} == {(40, 7, "")}
+    assert {(g.prompt_tokens, g.completion_tokens, g.prefix, g.shown) for g in generations} == {(40, 7, "", SHOWN_CODE)}
     assert all(g.seconds >= 0 for g in generations) and llm.closed
 
 
@@ -564,7 +567,7 @@ def test_a_regenerated_duplicate_is_sampled_hotter_up_to_max_temperature(fake_ll
     cfg = LlamaCppConfig(model_path=gguf, temperature=0.8, retry_temperature_step=0.3, max_temperature=1.2)
     generator = make_generator(cfg, seed=0)
     for retry in range(4):
-        generator.generate(Prompt(text=PROMPT_TEXT, messages=MESSAGES, programs=[STARTER], island=0, parent_keys=[], retry=retry), 1)
+        generator.generate(Prompt(text=PROMPT_TEXT, messages=MESSAGES, programs=[STARTER], shown_code=SHOWN_CODE, island=0, parent_keys=[], retry=retry), 1)
     generator.close()
     assert [call["temperature"] for call in FakeLlama.instances[0].calls] == pytest.approx([0.8, 1.1, 1.2, 1.2])
     assert LlamaCppConfig(model_path=gguf, temperature=2.0, max_temperature=1.5).temperature_for(3) == 2.0  # never below llm.temperature

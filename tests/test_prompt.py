@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from colmo.config import DatabaseConfig
@@ -187,6 +188,33 @@ def policy_v1(obs):
 def policy_v2(obs):
     """Improved version of policy_v1."""
 '''
+
+
+# A program an answer wrote that kept the versions it was shown, and calls them (sample 134 of
+# docs/llm-gfo-vs-none/runs/gfo-none/s1): shown as a later version, its helpers must not be
+# replaced by the versions of the same names.
+KEPT_VERSIONS = """import numpy as np
+
+def policy_v0(obs):
+    return 0.5 * obs[2]
+
+def policy_v1(obs):
+    return 0.7 * obs[2]
+
+def policy(obs):
+    return 0.5 * policy_v0(obs) + 0.5 * policy_v1(obs)
+"""
+
+
+def test_helpers_named_like_versions_are_shown_under_names_of_their_own():
+    first = "def policy(obs):\n    return -obs[1]"
+    prompt = build_prompt("Task.", Selection(0, [stored(first, 1.0), stored(KEPT_VERSIONS, 2.0)]))
+    assert "def policy_v0_v1(obs):" in prompt.shown_code and "def policy_v1_v1(obs):" in prompt.shown_code
+    namespace: dict = {}
+    exec(prompt.shown_code, namespace)  # every version computes what its program computes
+    obs = np.array([0.6, 0.8, 2.0])
+    assert namespace["policy_v0"](obs) == -0.8
+    assert namespace["policy_v1"](obs) == pytest.approx(0.5 * 1.0 + 0.5 * 1.4)  # before: infinite recursion
 
 
 def test_other_function_name():

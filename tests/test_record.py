@@ -3,6 +3,8 @@ that the counters make for every report."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from colmo.generate import Generation
@@ -16,6 +18,12 @@ def sample(index: int, calls: int = 1) -> Sample:
 
 def test_a_pending_record_gives_back_the_sample_it_was_made_from():
     assert SampleRecord.of(sample(3, calls=2), PENDING).as_sample() == sample(3, calls=2)
+
+
+def test_a_pending_chat_answer_keeps_the_code_its_prompt_showed():
+    # A resumed run reads it again, and it may call what its prompt showed.
+    made = dataclasses.replace(sample(4), generation=dataclasses.replace(sample(4).generation, shown="def policy_v0(obs):\n    return 0.0"))
+    assert SampleRecord.of(made, PENDING).as_sample() == made
 
 
 def test_totals_count_model_calls_records_by_status_and_rates():

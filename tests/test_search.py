@@ -164,24 +164,36 @@ STARTER_WITH = "import numpy as np\n\ndef policy(obs):\n    action = {}\n    ret
 
 
 class ScriptedGenerator(Generator):
-    """Answers from a script, one per model call, whatever the prompt; counts the calls."""
+    """Answers from a script, one per model call, whatever the prompt; counts the calls. `chat`:
+    the answers carry the code their prompt showed, as a chat model's do."""
 
-    def __init__(self, answers: list[str]):
+    def __init__(self, answers: list[str], chat: bool = False):
         super().__init__(cfg=None, seed=0)
-        self.answers, self.prompts = list(answers), []
+        self.answers, self.prompts, self.chat = list(answers), [], chat
 
     def generate(self, prompt, n):
         self.prompts.append(prompt)
-        return [Generation(self.answers.pop(0), "scripted", prompt_tokens=10, completion_tokens=5, seconds=0.5) for _ in range(n)]
+        shown = prompt.shown_code if self.chat else ""
+        return [Generation(self.answers.pop(0), "scripted", prompt_tokens=10, completion_tokens=5, seconds=0.5, shown=shown) for _ in range(n)]
 
 
-def scripted_search(tmp_path, answers, *overrides):
+def scripted_search(tmp_path, answers, *overrides, chat=False):
     cfg = compose("search", f"search.max_samples={len(answers)}", "llm.batch_size=1", "search.queue_size=1", *TINY, *overrides)
-    generator = ScriptedGenerator(answers)
+    generator = ScriptedGenerator(answers, chat)
     summary = Search(cfg, tmp_path / "run", generator=generator).run()
     with sqlite3.connect(tmp_path / "run" / "programs.db") as connection:
         rows = connection.execute("SELECT status, model_calls, prompt_tokens, completion_tokens, generation_seconds FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
     return summary, rows, generator
+
+
+def test_a_chat_answer_that_calls_a_shown_version_is_evaluated(tmp_path):
+    # Before, such an answer failed: "NameError: name 'policy_v0' is not defined" (issue 19).
+    answers = ["```python\ndef policy(obs):\n    return 0.5 * policy_v0(obs) - 0.2 * obs[2]\n```"]
+    summary, rows, _ = scripted_search(tmp_path, answers, chat=True)
+    assert [row[0] for row in rows] == ["evaluated"] and summary.failures == 0
+    with sqlite3.connect(tmp_path / "run" / "programs.db") as connection:
+        [(code, shown)] = connection.execute("SELECT code, prompt_shown FROM samples WHERE sample = 0").fetchall()
+    assert "def policy_v0(obs):" in code and "policy_v0(obs)" in shown
 
 
 def test_gfo_none_evaluates_a_program_that_differs_from_a_known_one_only_in_its_constants(tmp_path):
@@ -216,9 +228,10 @@ def test_duplicate_retries_are_bounded_then_the_duplicate_is_recorded(tmp_path):
 def test_a_store_written_before_model_calls_were_counted_opens_with_one_call_per_sample(tmp_path):
     store = ProgramStore(tmp_path / "programs.db")
     store.add(SampleRecord(sample=0, batch=0, status="duplicate", island=0, parent_keys=(), generator="old", raw="x"))
-    store.connection.execute("ALTER TABLE samples DROP COLUMN model_calls")  # the schema of older stores
+    for column in ("model_calls", "prompt_shown"):  # the schema of older stores
+        store.connection.execute(f"ALTER TABLE samples DROP COLUMN {column}")
     store.close()
     reopened = ProgramStore(tmp_path / "programs.db")
-    reopened.add(SampleRecord(sample=1, batch=1, status="duplicate", island=0, parent_keys=(), generator="new", raw="y", model_calls=3))
-    assert [(record.sample, record.model_calls) for record in reopened.records()] == [(0, 1), (1, 3)]
+    reopened.add(SampleRecord(sample=1, batch=1, status="duplicate", island=0, parent_keys=(), generator="new", raw="y", model_calls=3, prompt_shown="z"))
+    assert [(record.sample, record.model_calls, record.prompt_shown) for record in reopened.records()] == [(0, 1, ""), (1, 3, "z")]
     reopened.close()

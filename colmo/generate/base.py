@@ -33,6 +33,9 @@ class Generation:
     # Model calls this answer cost: more than 1 when answers before it were duplicates, thrown
     # away and generated again (their tokens and seconds are counted in the fields above).
     calls: int = 1
+    # The code a chat answer's prompt showed (`Prompt.shown_code`), which the answer may call
+    # without copying it; empty for a completion, whose `prefix` holds it, and for `mutate`.
+    shown: str = ""
 
     def after(self, discarded: "Generation") -> "Generation":
         """This answer, charged with the calls, tokens and seconds of a discarded one before it."""
@@ -94,6 +97,10 @@ class LanguageModelGenerator(Generator):
         """What an answer to `prompt` continues: nothing in the chat form, the prompt text in the completion form."""
         return "" if self.chat else prompt.text
 
+    def shown(self, prompt: Prompt) -> str:
+        """The code an answer to `prompt` saw without continuing it: the prompt's code in the chat form."""
+        return prompt.shown_code if self.chat else ""
+
 
 def import_library(module: str, package: str, llm: str) -> Any:
     """The optional library `llm=<llm>` runs on; `GeneratorError` saying how to install it (the
@@ -108,13 +115,15 @@ GENERATORS: Registry[type[Generator]] = Registry("llm.name")
 
 
 def batch_of(
-    texts: Sequence[str], generator: str, prompt_tokens: int, completion_tokens: Sequence[int], seconds: float, prefix: str = ""
+    texts: Sequence[str], generator: str, prompt_tokens: int, completion_tokens: Sequence[int], seconds: float, prefix: str = "",
+    shown: str = "",
 ) -> list[Generation]:
-    """The generations of one request (continuing `prefix`, for a completion). Its prompt is
+    """The generations of one request (continuing `prefix`, for a completion; having seen
+    `shown`, for a chat answer). Its prompt is
     counted on the first only and its time is split evenly, so that sums over generations are
     the request's totals."""
     return [
-        Generation(text, generator, prompt_tokens if i == 0 else 0, completion, seconds / len(texts), prefix)
+        Generation(text, generator, prompt_tokens if i == 0 else 0, completion, seconds / len(texts), prefix, shown=shown)
         for i, (text, completion) in enumerate(zip(texts, completion_tokens))
     ]
 

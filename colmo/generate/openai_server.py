@@ -236,4 +236,5 @@ class OpenAIGenerator(LanguageModelGenerator):
         )
         return batch_of(
             texts, f"openai:{self.cfg.model}@{server.url}", prompt_tokens, _split(completion_tokens, len(texts)), seconds, self.prefix(prompt),
+            self.shown(prompt),
         )
