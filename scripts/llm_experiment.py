@@ -14,7 +14,10 @@ what is left. Overrides after `--` apply to every run; a variant is one or more 
 
 `report` reads every `OUT/*/s*/summary.json` (and the run's `.hydra/config.yaml`) and writes
 Markdown beside a figure (`best_so_far.png`): per variant, best score so far against model
-calls (mean over seeds, band from the lowest to the highest seed, each seed thin); model calls
+calls and against seconds of generation (mean over seeds, band from the lowest to the highest
+seed, each seed thin; the seconds are the model's, summed over the calls from the store, which
+count the time of every process of a resumed run and leave out the time between them; with one
+model thread the model is busy most of a run, and the report gives each run's share); model calls
 to the task's `target_score`; final best and held-out score, mean ± std and per seed; programs
 evaluated, per 100 model calls, duplicate and valid-program rates; and, for two variants, a
 bootstrap interval of the difference of their mean final bests (seeds resampled with
@@ -95,6 +98,7 @@ class Run:
     target: Optional[float]
     processes: int = 1  # the colmo processes that ran it (a run stopped and resumed: more than one)
     whole_time: bool = True  # its summary's seconds count every process (colmo records them since 53131fe)
+    clock: Optional["GenerationClock"] = None  # seconds of generation by model calls, from its store
 
     @property
     def seconds(self) -> str:
@@ -141,6 +145,14 @@ class Run:
         return x, best
 
     @property
+    def seconds_curve(self) -> Optional[tuple[list[float], list[float]]]:
+        """Best score so far against seconds of generation, where the store says them."""
+        if self.clock is None:
+            return None
+        x, best = self.curve
+        return [self.clock.seconds_at(calls) for calls in x], best
+
+    @property
     def calls_to_target(self) -> Optional[int]:
         if self.target is None:
             return None
@@ -160,8 +172,33 @@ def read_runs(out: Path) -> tuple[dict[str, list[Run]], list[str]]:
         config = yaml.safe_load((run_dir / ".hydra" / "config.yaml").read_text())
         target = config.get("task", {}).get("target_score")
         seed = int(config["seed"])
-        variants.setdefault(run_dir.parent.name, []).append(Run(run_dir.parent.name, seed, summary, target, *processes_of(run_dir)))
+        run = Run(run_dir.parent.name, seed, summary, target, *processes_of(run_dir), GenerationClock.of(run_dir / STORE_FILE))
+        variants.setdefault(run_dir.parent.name, []).append(run)
     return variants, unfinished
+
+
+@dataclass(frozen=True)
+class GenerationClock:
+    """A run's seconds of generation after each stored sample, by the model calls made so far."""
+
+    calls: np.ndarray  # cumulative model calls after each sample, the starter's 0 first
+    seconds: np.ndarray  # cumulative seconds of generation after each sample
+
+    @classmethod
+    def of(cls, store: Path) -> Optional["GenerationClock"]:
+        try:
+            with sqlite3.connect(f"file:{store}?mode=ro", uri=True) as connection:
+                rows = connection.execute("SELECT model_calls, generation_seconds FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
+        except sqlite3.DatabaseError:  # no store (a run made before stores, or a test's empty file)
+            return None
+        if not rows:
+            return None
+        calls, seconds = np.array(rows, dtype=float).T
+        return cls(np.concatenate([[0.0], np.cumsum(calls)]), np.concatenate([[0.0], np.cumsum(seconds)]))
+
+    def seconds_at(self, calls: float) -> float:
+        """The seconds of generation when the run had made `calls` model calls."""
+        return float(self.seconds[min(np.searchsorted(self.calls, calls), len(self.seconds) - 1)])
 
 
 def processes_of(run_dir: Path) -> tuple[int, bool]:
@@ -313,23 +350,33 @@ def report_lines(variants: dict[str, list[Run]], unfinished: list[str], command:
         ]
     lines += [*call_yields, ""]
     if variants:
-        lines += ["## Best so far", "", f"![best so far against model calls]({PLOT_FILE})", ""]
+        lines += ["## Best so far", "", f"![best so far against model calls and seconds of generation]({PLOT_FILE})", ""]
+        busy = [f"{r.variant} s{r.seed} {100 * r.summary['generator_busy']:.0f}%" for runs in variants.values() for r in runs if "generator_busy" in r.summary]
+        if busy:
+            lines += [
+                "Seconds of generation: the model's time, summed over its calls (every process of a resumed run, not the time "
+                f"between them). The share of each run's wall-clock time the model was busy: {', '.join(busy)}.", "",
+            ]
     if unfinished:
         lines += ["## Not counted (not finished)", "", *unfinished, ""]
     return lines
 
 
 def best_so_far_figure(variants: dict[str, list[Run]]) -> Figure:
-    figure = Figure(figsize=(7, 4.8), layout="constrained")
-    ax = figure.subplots()
-    for index, (name, runs) in enumerate(variants.items()):
-        draw_seeds(ax, name, [r.curve for r in runs], COLORS[index % len(COLORS)])
+    """Best so far against model calls, and beside it against seconds of generation (the runs
+    whose stores say them)."""
+    timed = all(run.clock is not None for runs in variants.values() for run in runs)
+    figure = Figure(figsize=(13 if timed else 7, 4.8), layout="constrained")
+    axes = figure.subplots(1, 2 if timed else 1, squeeze=False)[0]
     target = next(iter(variants.values()))[0].target
-    if target is not None:
-        ax.axhline(target, color="0.4", linestyle=":", linewidth=1.2, label=f"target {target:g}")
-    ax.set(xlabel="model calls", ylabel="best score so far")
-    ax.grid(alpha=0.3)
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=2, frameon=False)
+    for ax, xlabel, curve in zip(axes, ["model calls", "seconds of generation"], [lambda r: r.curve, lambda r: r.seconds_curve]):
+        for index, (name, runs) in enumerate(variants.items()):
+            draw_seeds(ax, name, [curve(r) for r in runs], COLORS[index % len(COLORS)])
+        if target is not None:
+            ax.axhline(target, color="0.4", linestyle=":", linewidth=1.2, label=f"target {target:g}")
+        ax.set(xlabel=xlabel, ylabel="best score so far")
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=2, frameon=False)
     return figure
 
 

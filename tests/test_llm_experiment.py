@@ -71,6 +71,31 @@ def test_the_report_counts_model_calls_per_seed_and_compares_two_variants(tmp_pa
     assert (tmp_path / "best_so_far.png").stat().st_size > 0
 
 
+def test_the_figure_shows_best_so_far_against_seconds_of_generation_where_stores_say_them(tmp_path):
+    from colmo.generate import Generation
+    from colmo.record import Sample, SampleRecord
+    from colmo.store import STORE_FILE, ProgramStore
+
+    for variant, best in [("gfo-none", 50.0), ("gfo-oneplusone", 200.0)]:
+        run_dir = tmp_path / variant / "s0"
+        write_run(run_dir, 0, best)
+        (run_dir / "programs.db").unlink()
+        store = ProgramStore(run_dir / STORE_FILE)
+        # 48 calls: the first answer took 3 calls (two duplicates thrown away) and 30 s, each other 10 s.
+        store.add(*(
+            SampleRecord.of(Sample(index, index, 0, (), Generation("answer", "test", seconds=30.0 if index == 0 else 10.0, calls=3 if index == 0 else 1)), "evaluated")
+            for index in range(46)
+        ))
+        store.close()
+    [run] = llm_experiment.read_runs(tmp_path)[0]["gfo-none"]
+    assert run.curve == ([0.0, 12.0, 40.0, 48.0], [1.0, 0.0, 50.0, 50.0])
+    assert run.seconds_curve == ([0.0, 120.0, 400.0, 480.0], [1.0, 0.0, 50.0, 50.0])  # call 12 ends answer 10: 30 + 9 x 10 s
+    llm_experiment.write_report(tmp_path, tmp_path / "report.md", "report")
+    from matplotlib.image import imread
+
+    assert imread(tmp_path / "best_so_far.png").shape[1] > 1.5 * 4.8 * 130  # two panels side by side
+
+
 def test_the_bootstrap_interval_of_equal_groups_includes_zero():
     difference, low, high = llm_experiment.bootstrap_difference([1.0, 5.0, 9.0], [1.0, 5.0, 9.0])
     assert difference == 0.0 and low < 0 < high
