@@ -157,7 +157,11 @@ def live_display(search: "Search", console: Console) -> Iterator[None]:
     for old in replaced:
         root.removeHandler(old)
     root.addHandler(handler)
-    live.start()
+    # The first frame is drawn here, before the search logs anything. Rich works out what a
+    # printed line erases of the display before it renders the line, and writes later: a first
+    # frame that its refresh thread drew in between (the search's first log line comes within
+    # its first half second) stayed on screen, under or mixed with that line.
+    live.start(refresh=True)
     try:
         yield
     finally:

@@ -186,6 +186,28 @@ class Terminal:
         return ["".join(row).rstrip() for row in self.rows]
 
 
+class SlowLine:
+    """A line that takes a second to render: printed on the display's console, it is between
+    rich's choice of what to erase and its write while the display redraws (twice a second)."""
+
+    text = "a line printed as the display starts"
+
+    def __rich_console__(self, console, options):
+        time.sleep(1.0)
+        yield self.text
+
+
+def test_a_line_printed_as_the_display_starts_stands_above_it():
+    # A log line printed just as the display starts (the search's first one comes within half a
+    # second) while its first frame is drawn: the line stands alone, the display leaves nothing.
+    console = Console(file=io.StringIO(), force_terminal=True, width=COLUMNS, height=50)
+    with progress(fake_search(), console):
+        console.print(SlowLine())
+    screen = Terminal(COLUMNS)
+    screen.feed(console.file.getvalue().replace("\n", "\r\n"))  # a terminal's line discipline adds the \r
+    assert [line for line in screen.lines if line] == [SlowLine.text], screen.lines
+
+
 def record_session(args: list[str], cwd, timeout: float = 600) -> str:
     """Run `python -m colmo <args>` with a pseudo-terminal as its stdin, stdout and stderr (as a
     person in a terminal would), and return everything it wrote there."""
