@@ -8,6 +8,7 @@ policy does. `as_action` is the one check of what a policy returns. `episode_see
 
 from __future__ import annotations
 
+import math
 from typing import Callable, Sequence
 
 import numpy as np
@@ -34,12 +35,27 @@ def heldout_seeds(seed: int, episodes: int, training: Sequence[int]) -> list[int
 
 
 _REAL_KINDS = frozenset("biuf")  # bool, signed and unsigned integers, floats
+_FLOAT64 = np.dtype(np.float64)
 
 
 def as_action(raw: object, action_size: int) -> np.ndarray:
     """The policy's output as a finite `(action_size,)` float array, or `PolicyFailure` saying
     what is wrong. Only real numbers are actions: strings, bytes, complex numbers, dates and
     arbitrary objects are refused even where numpy would convert them."""
+    # What policies return nearly always, a float or a float64 array of the right shape, is
+    # checked without numpy's per-call costs, in a fifth to a half of the general path's time
+    # (which, at every control step of every episode, took longer than a typical pendulum
+    # policy itself); the result is the same array. Exact types only: a subclass, a float32 or
+    # a non-finite value takes the general path.
+    kind = type(raw)
+    if kind is float or kind is np.float64:
+        if action_size == 1 and math.isfinite(raw):
+            return np.array((float(raw),))
+    elif kind is np.ndarray and raw.dtype == _FLOAT64 and raw.shape == (action_size,):
+        action = raw.copy()
+        # A finite sum means finite values; finite values whose sum overflows take the general path.
+        if math.isfinite(sum(action.tolist())):
+            return action
     try:
         array = np.asarray(raw)
         if array.dtype.kind == "O":  # a sequence mixing numbers and size-1 arrays, or arbitrary objects

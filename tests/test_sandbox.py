@@ -209,6 +209,26 @@ def test_a_programs_monkeypatching_stays_in_its_own_copy():
     assert fresh["np"].random.normal() == np.random.RandomState(3).normal()
 
 
+@pytest.mark.parametrize("raw, size", [
+    (0.25, 1), (np.float64(-3.5), 1), (np.array([0.5]), 1), (np.arange(6.0), 6), (np.arange(12.0)[::2], 6),
+    (np.array([1e308, 1e308]), 2),  # finite values whose sum is not
+    (np.float32(0.5), 1), (True, 1), (3, 1), (np.array(2.0), 1), ([1, 2.5], 2), ((np.float64(1.5),), 1),
+])
+def test_an_action_is_a_new_float_array_of_what_the_policy_returned(raw, size):
+    action = as_action(raw, size)
+    assert action.dtype == np.float64 and action.shape == (size,) and action.flags.writeable
+    assert action.tolist() == np.ravel(np.asarray(raw, dtype=np.float64)).tolist()
+    assert not np.shares_memory(action, np.asarray(raw))  # the policy may keep and change what it returned
+
+
+@pytest.mark.parametrize("raw, size", [
+    (math.inf, 1), (np.float64("nan"), 1), (np.array([1.0, -np.inf]), 2), (np.array([np.nan]), 1), (float("-inf"), 1),
+])
+def test_a_non_finite_action_fails(raw, size):
+    with pytest.raises(PolicyFailure, match="non-finite action"):
+        as_action(raw, size)
+
+
 def test_each_instance_draws_from_its_own_generator():
     """An instance's np.random draws what the global generator seeded with its episode's seed
     draws, whatever other instances or the evaluator draw in between (the referee steps
