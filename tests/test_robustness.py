@@ -90,6 +90,17 @@ def test_the_model_is_perturbed_during_the_episode_and_restored_after_it():
         assert np.array_equal(getattr(env.model, name), nominal[name]), name
 
 
+def test_environments_of_a_task_each_have_their_own_model():
+    """A task's model is compiled once per process and copied for each environment: one whose
+    model a perturbation changes leaves the others, and their episodes, nominal."""
+    expected = trajectory(pendulum(), SEEDS[0])
+    perturbed, other = pendulum(EVERYTHING), pendulum()
+    perturbed.reset(SEEDS[0])  # its model perturbed until the episode ends
+    assert not np.array_equal(perturbed.model.body_mass, other.model.body_mass)
+    assert np.array_equal(trajectory(other, SEEDS[0]), expected)
+    assert np.array_equal(trajectory(pendulum(), SEEDS[0]), expected)
+
+
 def test_a_delay_of_k_steps_applies_each_action_k_steps_late():
     k = 3
     delayed = trajectory(pendulum(PerturbConfig(delay=k)), SEEDS[0])
