@@ -201,9 +201,10 @@ def finish(
     heldout = heldout_evaluator(evaluator, cfg.seed, plan.heldout_episodes)
     heldout_until = time.monotonic() + plan.heldout_seconds
     best_took = 0.0  # seconds the best program's held-out score took: what simplifying costs per measurement
+    step = time.monotonic()
     for record in top:
         # The best program may use the whole run's time left; the others only the held-out slot.
-        limit, started = min(_left(until if not best.heldout else heldout_until), heldout.referee_timeout_s), time.monotonic()
+        limit, scoring = min(_left(until if not best.heldout else heldout_until), heldout.referee_timeout_s), time.monotonic()
         evaluation = heldout_score(executor, heldout, record.skeleton, record.params, timeout_s=limit) if limit > 0 else None
         if evaluation is not None and evaluation.failure == CANCELLED:  # the search is stopping at once
             return best
@@ -211,7 +212,7 @@ def finish(
         if evaluation is None or (evaluation.failure and limit < heldout.referee_timeout_s and _left(until) <= 0):
             log.warning("no time left for %d held-out scores (search.max_seconds)", len(top) - len(best.heldout))
             break
-        best_took = best_took or time.monotonic() - started
+        best_took = best_took or time.monotonic() - scoring
         score: Optional[float] = None if evaluation.failure else evaluation.score
         store.set_heldout(record.sample, score)
         best.heldout.append({
@@ -221,7 +222,7 @@ def finish(
         log.info("sample %d: training score %.2f, held-out %s over %d episodes", record.sample, record.score, _shown(score), len(heldout.seeds))
     if not top:
         return best
-    took["held-out"] = time.monotonic() - started
+    took["held-out"] = time.monotonic() - step
     if cfg.evaluation.robustness:
         # Its time comes out of the simplification's slot, which takes what is left.
         if not best.heldout or not plan.robustness_seconds or _left(until) - plan.render_seconds < plan.robustness_seconds:
