@@ -186,11 +186,7 @@ class GenerationClock:
 
     @classmethod
     def of(cls, store: Path) -> Optional["GenerationClock"]:
-        try:
-            with sqlite3.connect(f"file:{store}?mode=ro", uri=True) as connection:
-                rows = connection.execute("SELECT model_calls, generation_seconds FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
-        except sqlite3.DatabaseError:  # no store (a run made before stores, or a test's empty file)
-            return None
+        rows = stored_samples(store, "model_calls, generation_seconds")
         if not rows:
             return None
         calls, seconds = np.array(rows, dtype=float).T
@@ -231,15 +227,27 @@ class CallYield:
         return 100 * self.evaluated / self.calls if self.calls else 0.0
 
 
-def call_yield(run_dir: Path, first: int) -> Optional[CallYield]:
-    """The model-call yield of a run (finished or still running: its store is read, not written)."""
-    path = run_dir / STORE_FILE
-    if not path.is_file():
+def stored_samples(store: Path, columns: str) -> Optional[list[tuple]]:
+    """`columns` of a run's samples in order, the starter left out, read without writing (the
+    run may still be going); None where there is no store yet, or the file is not one."""
+    if not store.is_file():
         return None
     try:
-        with sqlite3.connect(f"file:{path}?mode=ro", uri=True) as store:
-            rows = store.execute("SELECT status, model_calls FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
-    except sqlite3.DatabaseError:  # not a store yet (a run that has just started)
+        connection = sqlite3.connect(f"file:{store}?mode=ro", uri=True)
+    except sqlite3.DatabaseError:
+        return None
+    try:
+        return connection.execute(f"SELECT {columns} FROM samples WHERE sample >= 0 ORDER BY sample").fetchall()
+    except sqlite3.DatabaseError:  # not a store (yet): a run that has just started, a test's empty file
+        return None
+    finally:
+        connection.close()
+
+
+def call_yield(run_dir: Path, first: int) -> Optional[CallYield]:
+    """The model-call yield of a run (finished or still running: its store is read, not written)."""
+    rows = stored_samples(run_dir / STORE_FILE, "status, model_calls")
+    if rows is None:
         return None
     calls = evaluated = 0
     first_evaluated = None
