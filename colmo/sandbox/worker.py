@@ -164,16 +164,16 @@ def _on_this_cpu() -> Iterator[None]:
     try:
         allowed = os.sched_getaffinity(0)
         cpu = _LIBC.sched_getcpu()
-        if cpu < 0 or cpu not in allowed or len(allowed) == 1:
-            raise OSError
-        os.sched_setaffinity(0, {cpu})
+        pinned = len(allowed) > 1 and cpu in allowed
+        if pinned:
+            os.sched_setaffinity(0, {cpu})
     except OSError:
-        yield
-        return
+        pinned = False
     try:
         yield
     finally:
-        os.sched_setaffinity(0, allowed)
+        if pinned:
+            os.sched_setaffinity(0, allowed)
 
 
 def _run_program(env: Environment, request: EvalRequest) -> Evaluation:
