@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import ast
 import math
-from typing import Iterator, Mapping, Sequence
+from typing import Collection, Iterator, Mapping, Sequence
 
 _DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
 
@@ -67,6 +67,18 @@ def bindings(node: ast.AST) -> Iterator[str]:
         yield node.rest
     elif isinstance(node, (ast.Global, ast.Nonlocal)):
         yield from node.names
+
+
+def unbound_names(tree: ast.AST, predefined: Collection[str]) -> list[str]:
+    """The names `tree` reads that nothing in it binds and `predefined` does not hold, in source
+    order: each raises NameError where it is reached. Scopes are not told apart, so a name
+    bound anywhere counts as bound everywhere (this never flags a name the program defines)."""
+    bound = {name for node in ast.walk(tree) for name in bindings(node)}
+    read = sorted(
+        (node.lineno, node.col_offset, node.id) for node in ast.walk(tree)
+        if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load) and node.id not in bound and node.id not in predefined
+    )
+    return list(dict.fromkeys(name for _, _, name in read))
 
 
 # Fields whose subtree is no value a rewrite may replace or drop on its own: an index and what it

@@ -3,8 +3,8 @@
 The output is untrusted text, read in the coordinator, so it is bounded before anything parses
 it: at most `MAX_ANSWER_CHARS` characters and `MAX_NESTING` levels of brackets (a linear scan),
 so a hostile answer costs milliseconds, not minutes and gigabytes. Then the policy is extracted
-(`colmo.extract`), parametrized (`colmo.program`), bounded to `MAX_PROGRAM_NODES` AST nodes, and
-statically checked (`colmo.sandbox.check`).
+(`colmo.extract`), parametrized (`colmo.program`), bounded to `MAX_PROGRAM_NODES` AST nodes,
+statically checked (`colmo.sandbox.check`), and refused if it reads a name that nothing defines.
 
 `read_program` raises `Unusable` when no program can be read (the sample is `unusable`) and
 `ForbiddenProgram` when the program is refused (the sample `failed`).
@@ -16,11 +16,12 @@ import textwrap
 from pathlib import Path
 from typing import Optional, Sequence
 
-from colmo.astutil import node_count
+from colmo.astutil import node_count, unbound_names
 from colmo.errors import ConfigError
 from colmo.extract import ExtractionError, extract_policy, first_syntax_error
 from colmo.program import ParametricProgram, ProgramError, instantiate, measure, parametrize
 from colmo.sandbox.check import ForbiddenProgram, check_tree, parse_program
+from colmo.sandbox.namespace import PREDEFINED_NAMES
 
 MAX_ANSWER_CHARS = 100_000  # a 1024-token answer is about 4,000 characters
 MAX_NESTING = 100  # brackets; Python's own parser stops at 200
@@ -64,11 +65,22 @@ def read_program(
     if node_count(tree) > MAX_PROGRAM_NODES:
         raise Unusable(f"the program has more than {MAX_PROGRAM_NODES} AST nodes")
     check_tree(tree, allowed_imports)
+    # A name nothing defines fails the first step it is reached on (small models use the
+    # variables of a shown version they did not copy): said here, where a chat model can be told.
+    undefined = unbound_names(tree, PREDEFINED_NAMES)
+    if undefined:
+        raise Unusable(f"{_named(undefined)} used but never defined")
     if max_nodes is not None:
         nodes = measure(instantiate(program.skeleton, program.values)).nodes
         if nodes > max_nodes:
             raise ForbiddenProgram(f"too large: {nodes} AST nodes (database.max_nodes={max_nodes})")
     return program
+
+
+def _named(names: Sequence[str]) -> str:
+    """`theta` is, `theta` and `omega` are."""
+    quoted = [f"`{name}`" for name in names]
+    return f"{quoted[0]} is" if len(quoted) == 1 else f"{', '.join(quoted[:-1])} and {quoted[-1]} are"
 
 
 def read_policy_file(path: str, allowed_imports: Sequence[str]) -> ParametricProgram:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import ast
 import copy
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -51,6 +52,13 @@ class Prompt:
     # Which regeneration of a duplicate answer this prompt asks for (0: a first answer); language
     # models sample it hotter (`LanguageModelConfig.temperature_for`).
     retry: int = 0
+
+    def followed_up(self, answer: str, feedback: str, retry: int) -> "Prompt":
+        """This prompt's chat continued: its system and user messages, the model's `answer` to
+        them and `feedback`, what was wrong with it; the same selection (programs, island,
+        parents). Only the last answer is kept: a longer conversation would only be slower."""
+        messages = [*self.messages[:2], {"role": "assistant", "content": answer}, {"role": "user", "content": feedback}]
+        return dataclasses.replace(self, messages=messages, retry=retry)
 
 
 def _system_message(function_name: str, args: str, constants_tuned: bool, allowed_imports: Sequence[str]) -> str:

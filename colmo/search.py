@@ -12,11 +12,10 @@ deterministic function of its seed whatever the timing. A batch is written to th
 as that is known: the store's sample numbers never have a gap, and a resumed run evaluates
 what was generated but not evaluated.
 
-A duplicate answer (a program evaluated before, by structure with GFO, by code and constants
-with `gfo=none`: `colmo.database.identity`) is generated again from another selection, up to
-`search.duplicate_retries` times, before it is recorded as a duplicate (`colmo.answers`);
-`max_samples` and the counters count model calls, the regenerations included, so that samples
-mean model calls.
+A duplicate answer (by structure with GFO, by code and constants with `gfo=none`) is generated
+again up to `search.duplicate_retries` times (`colmo.answers`: a chat model is told what it
+copied, or why its answer cannot be used); `max_samples` and the counters count model calls,
+the regenerations included, so that samples mean model calls.
 
 Stopping: `search.max_samples`, `search.stop_at_score`, and `search.max_seconds`, a wall-clock
 limit of the whole run from the start of the process, with the search's own deadline before it
@@ -40,7 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
-from colmo.answers import AnswerReader, regenerate_duplicates
+from colmo.answers import AnswerReader, regenerate
 from colmo.budget import TimeBudget
 from colmo.config import SearchConfig
 from colmo.database import ProgramDatabase, StoredProgram
@@ -235,7 +234,7 @@ class Search:
         return self.cfg.search.max_samples - self.counters.samples - self.in_flight_samples
 
     def _prompt(self, retry: int = 0) -> Prompt:
-        """A prompt from a new selection of the database; `retry`: the regeneration of a duplicate it is for."""
+        """A prompt from a new selection of the database; `retry`: the regeneration of an answer it is for."""
         spec, tuned = self.spec, self.cfg.gfo.tunes_constants
         prompt = build_prompt(spec.description, self.database.select(), constants_tuned=tuned, allowed_imports=spec.allowed_imports)
         return dataclasses.replace(prompt, retry=retry)
@@ -251,8 +250,9 @@ class Search:
         if generations is None:
             return None
         answers = [self.reader.answer(prompt, generation) for generation in generations]
-        answers = regenerate_duplicates(
+        answers = regenerate(
             answers, self.reader, self.database.is_known, self._prompt, self._generated, self.cfg.search.duplicate_retries, self._samples_left() - n,
+            follow_up=self.generator.follows_up,
         )
         seconds = time.perf_counter() - started
         self.generation_seconds += seconds

@@ -7,7 +7,7 @@ import pytest
 
 from colmo.errors import ConfigError
 from colmo.extract import ExtractionError, extract_policy
-from colmo.intake import read_policy_file
+from colmo.intake import Unusable, read_policy_file, read_program
 from colmo.program import parametrize
 
 
@@ -576,3 +576,31 @@ def test_a_raw_completion_body_in_a_file_is_read(tmp_path, indent):
     file.write_text(textwrap.indent('"""Damped proportional control."""\nangle = np.arctan2(obs[1], obs[0])\nreturn float(np.clip(-8.0 * angle - 1.2 * obs[2], -1.0, 1.0))\n', indent))
     program = read_policy_file(str(file), ["numpy", "math"])
     assert program.values == (-8.0, 1.2, -1.0, 1.0) and "def policy(obs):" in program.skeleton
+
+
+@pytest.mark.parametrize("body, undefined", [
+    ("    return -theta * 2.0", "`theta` is"),  # a shown version's variable, never defined here
+    ("    if obs[0] > 0:\n        return omega\n    return theta", "`omega` and `theta` are"),
+    ("    return policy_v0(obs)", "`policy_v0` is"),  # a completion-form answer of no prompt
+])
+def test_a_program_that_reads_a_name_nothing_defines_is_refused_before_it_runs(body, undefined):
+    with pytest.raises(Unusable, match=f"{undefined} used but never defined"):
+        read_program(f"import numpy as np\n\ndef policy(obs):\n{body}\n", ("numpy", "math"))
+
+
+def test_builtins_constants_and_names_bound_anywhere_are_defined():
+    code = textwrap.dedent("""
+        import numpy as np
+        GAIN = 2.0
+
+        def helper(x):
+            scale = abs(x) + sum([1.0, 2.0])
+            return scale * GAIN
+
+        def policy(obs):
+            total = 0.0
+            for value in obs:
+                total += helper(value)
+            return float(np.clip(total, -1, 1)) if isinstance(total, float) else 0.0
+    """)
+    assert read_program(code, ("numpy", "math")).skeleton.count("params[") >= 3

@@ -283,3 +283,14 @@ def test_the_chat_form_names_the_imports_the_task_allows():
     )
     assert "use only numpy and math." in default
     assert "use only numpy, math and scipy." in wider
+
+
+def test_a_follow_up_keeps_the_selection_and_holds_only_the_last_answer():
+    prompt = build_prompt(DESCRIPTION, Selection(2, [LOW, HIGH]), constants_tuned=True)
+    first = prompt.followed_up("```python\ndef policy(obs):\n    return 1.0\n```", "Your `policy` is `policy_v0` with other numbers.", 1)
+    second = first.followed_up("def policy(obs):\n    return theta", "Your answer cannot be used: `theta` is used but never defined.", 2)
+    assert [m["role"] for m in second.messages] == ["system", "user", "assistant", "user"]
+    assert second.messages[:2] == prompt.messages
+    assert second.messages[2]["content"] == "def policy(obs):\n    return theta" and "theta" in second.messages[3]["content"]
+    assert (second.retry, second.island, second.parent_keys, second.shown_code, second.text) == (2, 2, prompt.parent_keys, prompt.shown_code, prompt.text)
+    assert [m["role"] for m in prompt.messages] == ["system", "user"]  # the prompt itself is unchanged

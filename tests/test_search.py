@@ -170,6 +170,7 @@ class ScriptedGenerator(Generator):
     def __init__(self, answers: list[str], chat: bool = False):
         super().__init__(cfg=None, seed=0)
         self.answers, self.prompts, self.chat = list(answers), [], chat
+        self.follows_up = chat  # as a chat model's generator: a wasted answer is followed up
 
     def generate(self, prompt, n):
         self.prompts.append(prompt)
@@ -223,6 +224,35 @@ def test_duplicate_retries_are_bounded_then_the_duplicate_is_recorded(tmp_path):
     summary, rows, generator = scripted_search(tmp_path, answers, "search.duplicate_retries=1")
     assert rows == [("duplicate", 2, 20, 10, pytest.approx(1.0)), ("evaluated", 1, 10, 5, pytest.approx(0.5))]
     assert summary.samples == 3 and summary.duplicates_skipped == 1 and summary.duplicate_rate == pytest.approx(2 / 3)
+
+
+def test_a_chat_model_is_told_what_its_answer_copied_and_why_one_cannot_be_used(tmp_path):
+    """A chat model's wasted answer is answered in the same conversation: a copy of a shown
+    version with other numbers (GFO tunes those), then a name it never defined (a NameError at
+    the first step, before), then a new program; one sample of three model calls."""
+    copy_of_starter = f"```python\n{STARTER_WITH.format(0.7)}```"
+    undefined = "```python\ndef policy(obs):\n    return -2.0 * theta\n```"
+    fixed = "```python\ndef policy(obs):\n    theta = np.arctan2(obs[1], obs[0])\n    return -2.0 * theta\n```"
+    summary, rows, generator = scripted_search(tmp_path, [copy_of_starter, undefined, fixed], chat=True)
+    assert rows == [("evaluated", 3, 30, 15, pytest.approx(1.5))] and summary.programs_evaluated == 1
+    first, second, third = generator.prompts
+    assert [m["role"] for m in first.messages] == ["system", "user"]
+    assert [m["role"] for m in second.messages] == ["system", "user", "assistant", "user"]
+    assert second.messages[:2] == first.messages and second.messages[2]["content"] == copy_of_starter
+    assert "`policy_v0` with other numbers" in second.messages[3]["content"] and "another structure" in second.messages[3]["content"]
+    assert third.messages[2]["content"] == undefined and "`theta` is used but never defined" in third.messages[3]["content"]
+    assert [prompt.retry for prompt in generator.prompts] == [0, 1, 2]
+    assert {prompt.island for prompt in generator.prompts} == {first.island} and third.parent_keys == first.parent_keys
+
+
+def test_without_gfo_a_chat_model_is_told_it_repeated_a_program_and_other_generators_keep_unusable_answers(tmp_path):
+    copy_of_starter = f"```python\n{STARTER_WITH.format(0.0)}```"
+    summary, rows, generator = scripted_search(tmp_path / "none", [copy_of_starter, STARTER_WITH.format(0.3)], "gfo=none", chat=True)
+    assert "Your `policy` is `policy_v0` again" in generator.prompts[1].messages[3]["content"]
+    assert "numbers are tuned" not in generator.prompts[1].messages[3]["content"] and rows[0][:2] == ("evaluated", 2)
+    # A completion-form generator is never followed up: an answer without a program is recorded as such.
+    summary, rows, generator = scripted_search(tmp_path / "completion", ["def policy(obs):\n    return theta\n"] * 2)
+    assert [row[:2] for row in rows] == [("unusable", 1), ("unusable", 1)] and len(generator.prompts) == 2
 
 
 def test_a_store_written_before_model_calls_were_counted_opens_with_one_call_per_sample(tmp_path):

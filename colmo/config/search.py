@@ -73,8 +73,9 @@ class SearchLoopConfig:
         1000, "stop after this many model calls (generator requests' answers), duplicates, their regenerations and failures included",
     )
     duplicate_retries: int = option(
-        2, "a sample whose program was already evaluated is generated again, from another selection of the database "
-        "and with a fresh seed, up to this many times (each a model call) before it is recorded as a duplicate",
+        2, "a sample whose program was already evaluated is generated again, with a fresh seed, up to this many times "
+        "(each a model call) before it is recorded as a duplicate: a chat model is told in the same conversation what it "
+        "copied (and why an answer of no usable program is refused), other generators are asked from another selection",
     )
     # One hour by default: 1000 quadruped samples at one evaluation a second would take a day and
     # more, and a user should not have to know that to get a run that ends on its own.

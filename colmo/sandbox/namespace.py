@@ -51,6 +51,8 @@ _SAFE_BUILTINS: dict[str, Any] = {
     **{name: value for name, value in vars(builtins).items() if isinstance(value, type) and issubclass(value, BaseException)},
     "print": _discard,
 }
+# The names a program may read without binding them: the builtins above and its constants.
+PREDEFINED_NAMES = frozenset(_SAFE_BUILTINS) | {"params"}
 # Per process: the public API of each allowed top-level module, as a tree of modules that is
 # never handed out; each program gets a copy (`_copy_tree`).
 _TEMPLATES: dict[str, types.ModuleType] = {}
