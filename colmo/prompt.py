@@ -10,6 +10,8 @@ forms say that the numeric constants are tuned automatically, so the structure i
 change; without GFO (`gfo=none`, the programs run as written) nothing of the kind is said.
 Both forms ask for a version that differs from every one shown: small models otherwise
 copy the last version (most answers of a 1.5B model were copies, docs/llm-duplicates.md).
+An answer that brings no new program is followed up in the chat form (`Prompt.followed_up`:
+the model's answer and what was wrong with it, `colmo.answers`).
 
 Helpers the programs define (module-level functions, classes, constants) are shown once,
 above the versions. A helper that differs from one already shown under the same name, or
