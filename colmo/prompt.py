@@ -82,15 +82,34 @@ def _listed(names: Sequence[str]) -> str:
     return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
 
 
-def _instructions(new: str, previous: str, function_name: str, constants_tuned: bool) -> str:
-    """What the completion form's docstring asks, after the task's description."""
+def _instructions(new: str, previous: str, function_name: str, constants_tuned: bool, blind: str) -> str:
+    """What the completion form's docstring asks, after the task's description (`blind`: what
+    `_blind_versions` says, or nothing)."""
     lines = [
         f"On every iteration, improve {previous} over the {function_name}_vX methods from previous iterations.",
         f"{new} must differ from every version above.",
     ]
     if constants_tuned:
         lines.append(f"The numeric constants of {new} are tuned automatically afterwards: change its structure, not its numbers.")
+    if blind:
+        lines.append(blind)
     return "\n".join(lines)
+
+
+def _blind_versions(codes: Sequence[str], function_name: str, new: str) -> str:
+    """A sentence naming the shown versions that never read their arguments (every task's starter
+    returns a constant action), or "": a small model shown only such a version answers with
+    another constant far more often than not (docs/llm-duplicates.md)."""
+    blind = []
+    for version, code in enumerate(codes):
+        policy = next(s for s in ast.parse(code).body if isinstance(s, ast.FunctionDef) and s.name == function_name)
+        arguments = {a.arg for a in policy.args.posonlyargs + policy.args.args + policy.args.kwonlyargs}
+        if not any(isinstance(n, ast.Name) and n.id in arguments for n in ast.walk(policy) if not isinstance(n, ast.arg)):
+            blind.append(f"{function_name}_v{version}")
+    if not blind:
+        return ""
+    verb = "ignores its observation" if len(blind) == 1 else "ignore their observation"
+    return f"{_listed(blind)} {verb}: {new} should compute its action from the observation."
 
 
 def build_prompt(
@@ -107,14 +126,15 @@ def build_prompt(
 
     imports, definitions, versions, args = _render([program.code for program in programs], function_name)
     new, previous = f"{function_name}_v{len(programs)}", f"{function_name}_v{len(programs) - 1}"
-    docstring = f'"""{description.strip()}\n\n{_instructions(new, previous, function_name, constants_tuned)}\n"""'
+    blind = _blind_versions([program.code for program in programs], function_name, new)
+    docstring = f'"""{description.strip()}\n\n{_instructions(new, previous, function_name, constants_tuned, blind)}\n"""'
     shown_code = "\n\n\n".join(["\n".join(imports), *definitions, *versions])
     context = docstring + "\n\n" + shown_code
     header = f'def {new}({args}):\n    """Improved version of {previous}."""\n'
     # The chat form leaves out the header: the instruction asks for the function instead.
     request = (
         f"Write {new}, a new version that should score higher than {previous} and differs from every version above. "
-        f"Name it `{function_name}` in your answer."
+        + (f"{blind} " if blind else "") + f"Name it `{function_name}` in your answer."
     )
     messages = [
         {"role": "system", "content": _system_message(function_name, args, constants_tuned, allowed_imports)},

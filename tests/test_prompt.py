@@ -21,6 +21,7 @@ Observation: [angle, velocity].
 
 On every iteration, improve policy_v1 over the policy_vX methods from previous iterations.
 policy_v2 must differ from every version above.
+policy_v0 ignores its observation: policy_v2 should compute its action from the observation.
 """
 
 import numpy as np
@@ -61,7 +62,7 @@ def test_chat_messages_hold_the_same_programs_and_ask_for_the_next_version():
     context = EXPECTED[: EXPECTED.index("\n\n\ndef policy_v2")]
     assert user == (
         f"```python\n{context}\n```\n\nWrite policy_v2, a new version that should score higher than policy_v1 and differs from every version above. "
-        "Name it `policy` in your answer."
+        "policy_v0 ignores its observation: policy_v2 should compute its action from the observation. Name it `policy` in your answer."
     )
 
 
@@ -75,6 +76,7 @@ def test_pendulum_starter_from_the_database():
         f'"""{spec.description}\n\n'
         "On every iteration, improve policy_v0 over the policy_vX methods from previous iterations.\n"
         "policy_v1 must differ from every version above.\n"
+        "policy_v0 ignores its observation: policy_v1 should compute its action from the observation.\n"
         '"""\n\n'
         "import numpy as np\n\n\n"
         "def policy_v0(obs):\n    action = 0.0\n    return action\n\n\n"
@@ -267,7 +269,7 @@ def test_only_a_run_that_tunes_constants_says_so_in_both_forms():
     tuned = build_prompt(DESCRIPTION, Selection(2, [LOW, HIGH]), constants_tuned=True)
     assert plain.text == EXPECTED
     tuning = "The numeric constants of policy_v2 are tuned automatically afterwards: change its structure, not its numbers.\n"
-    assert tuned.text == EXPECTED.replace('above.\n"""', f'above.\n{tuning}"""', 1)
+    assert tuned.text == EXPECTED.replace("above.\n", f"above.\n{tuning}", 1)
     (plain_system, plain_user), (tuned_system, tuned_user) = ([m["content"] for m in p.messages] for p in (plain, tuned))
     assert "optimizer" in tuned_system and "structure" in tuned_system and "tuned" in tuned_system
     assert "optimizer" not in plain_system and "tuned" not in plain_system and "structure" not in plain_system
@@ -294,3 +296,14 @@ def test_a_follow_up_keeps_the_selection_and_holds_only_the_last_answer():
     assert second.messages[2]["content"] == "def policy(obs):\n    return theta" and "theta" in second.messages[3]["content"]
     assert (second.retry, second.island, second.parent_keys, second.shown_code, second.text) == (2, 2, prompt.parent_keys, prompt.shown_code, prompt.text)
     assert [m["role"] for m in prompt.messages] == ["system", "user"]  # the prompt itself is unchanged
+
+
+def test_versions_that_never_read_their_observation_are_named_in_both_forms():
+    """Every task's starter returns a constant: a model shown only that answers with another
+    constant more often than not, so the prompt says what such versions lack."""
+    uses_a_helper = stored("def gain(x):\n    return 2.0 * x\n\ndef policy(obs):\n    return -gain(obs[0])", 5.0)
+    blind = build_prompt(DESCRIPTION, Selection(0, [LOW, stored("def policy(obs):\n    x = 1.0\n    return x", 2.0)]))
+    sentence = "policy_v0 and policy_v1 ignore their observation: policy_v2 should compute its action from the observation."
+    assert sentence in blind.text and sentence in blind.messages[1]["content"]
+    seeing = build_prompt(DESCRIPTION, Selection(0, [HIGH, uses_a_helper]))
+    assert "ignore" not in seeing.text and "ignore" not in seeing.messages[1]["content"]
