@@ -36,6 +36,7 @@ import shlex
 import sqlite3
 import subprocess
 import sys
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional, Sequence
@@ -221,6 +222,11 @@ class CallYield:
     calls: int
     evaluated: int
     first_evaluated: Optional[int]
+    # Of the first calls: the answers (each had a first call; `evaluated`: at that call), and the
+    # calls that generated an answer again (a duplicate or unusable one thrown away), with the
+    # programs evaluated they led to.
+    first_answers: tuple[int, int] = (0, 0)  # (answers, evaluated at their first call)
+    regenerations: tuple[int, int] = (0, 0)  # (calls, evaluated)
 
     @property
     def per_100(self) -> float:
@@ -251,15 +257,24 @@ def call_yield(run_dir: Path, first: int) -> Optional[CallYield]:
         return None
     calls = evaluated = 0
     first_evaluated = None
+    answers, regenerations = Counter(), Counter()
     for status, model_calls in rows:
         if status == PENDING:  # generated, not settled yet: neither counted nor anything after it
             break
         if calls + model_calls > first and first_evaluated is None:
             first_evaluated = evaluated
+        if first_evaluated is None:  # every answer had a first call; model_calls - 1 generated it again
+            answers["calls"] += 1
+            answers["evaluated"] += status == EVALUATED and model_calls == 1
+            regenerations["calls"] += model_calls - 1
+            regenerations["evaluated"] += status == EVALUATED and model_calls > 1
         calls, evaluated = calls + model_calls, evaluated + (status == EVALUATED)
     if calls >= first and first_evaluated is None:
         first_evaluated = evaluated
-    return CallYield(run_dir.parent.name, int(run_dir.name[1:]), calls, evaluated, first_evaluated)
+    return CallYield(
+        run_dir.parent.name, int(run_dir.name[1:]), calls, evaluated, first_evaluated,
+        (answers["calls"], answers["evaluated"]), (regenerations["calls"], regenerations["evaluated"]),
+    )
 
 
 def yield_lines(out: Path, first: int) -> list[str]:
@@ -270,12 +285,18 @@ def yield_lines(out: Path, first: int) -> list[str]:
     lines = [
         "", "## Model calls that yield an evaluated program (each run's store, finished or not)", "",
         f"A call's answer is evaluated unless it is a duplicate (thrown away and generated again, or stored as one), "
-        f"unusable or failed. First {first} calls: the programs evaluated among the answers to a run's first {first} model calls.", "",
-        f"| Variant | Seed | Calls settled | Programs evaluated | per 100 calls | First {first} calls: evaluated | per 100 |",
-        "|---|---|---|---|---|---|---|",
+        f"unusable or failed. First {first} calls: the programs evaluated among the answers to a run's first {first} model calls; "
+        "of them, the answers evaluated at their first call (of all answers), and the calls that generated an answer again "
+        "(after a duplicate or an unusable answer, thrown away) with the programs evaluated they led to.", "",
+        f"| Variant | Seed | Calls settled | Programs evaluated | per 100 calls | First {first} calls: evaluated | per 100 "
+        "| evaluated at the first call | generated again: calls, evaluated |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for y in sorted(runs, key=lambda y: (y.variant, y.seed)):
-        head = "— | —" if y.first_evaluated is None else f"{y.first_evaluated} | {100 * y.first_evaluated / first:.1f}"
+        head = "— | — | — | —" if y.first_evaluated is None else (
+            f"{y.first_evaluated} | {100 * y.first_evaluated / first:.1f} | {y.first_answers[1]} of {y.first_answers[0]} "
+            f"| {y.regenerations[0]}, {y.regenerations[1]}"
+        )
         lines.append(f"| {y.variant} | {y.seed} | {y.calls} | {y.evaluated} | {y.per_100:.1f} | {head} |")
     lines += ["", f"Per variant, over the runs with at least {first} calls settled (mean ± sample std, each seed):", ""]
     for variant in sorted({y.variant for y in runs}):

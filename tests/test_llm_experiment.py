@@ -126,11 +126,13 @@ def test_the_model_call_yield_is_read_from_every_runs_store_over_its_first_calls
     write_store(tmp_path / "gfo-oneplusone" / "s1", [("evaluated", 1)] * 20)  # still running: fewer than 48 calls so far
     first = llm_experiment.call_yield(tmp_path / "gfo-oneplusone" / "s0", 48)
     assert (first.calls, first.evaluated, first.first_evaluated) == (50, 32, 31)
+    # Of the first 48 calls: 46 answers, 30 evaluated at their first call; 2 calls generated the first again, and it was evaluated.
+    assert (first.first_answers, first.regenerations) == ((46, 30), (2, 1))
     short = llm_experiment.call_yield(tmp_path / "gfo-oneplusone" / "s1", 48)
     assert (short.calls, short.first_evaluated) == (20, None)
     markdown = llm_experiment.write_report(tmp_path, tmp_path / "report.md", "report").read_text()  # no run finished: the yield alone
-    assert "| gfo-oneplusone | 0 | 50 | 32 | 64.0 | 31 | 64.6 |" in markdown
-    assert "| gfo-oneplusone | 1 | 20 | 20 | 100.0 | — | — |" in markdown
+    assert "| gfo-oneplusone | 0 | 50 | 32 | 64.0 | 31 | 64.6 | 30 of 46 | 2, 1 |" in markdown
+    assert "| gfo-oneplusone | 1 | 20 | 20 | 100.0 | — | — | — | — |" in markdown
     assert "gfo-oneplusone: 64.6 per 100 of the first 48 calls over 1 seeds (s0 64.6)" in markdown
 
 
