@@ -573,6 +573,14 @@ def test_a_regenerated_duplicate_is_sampled_hotter_up_to_max_temperature(fake_ll
     assert LlamaCppConfig(model_path=gguf, temperature=2.0, max_temperature=1.5).temperature_for(3) == 2.0  # never below llm.temperature
 
 
+def test_only_a_chat_model_follows_up_a_wasted_answer_and_only_with_llm_follow_up(fake_llama_cpp, gguf):
+    follows = {
+        (form, follow_up): make_generator(LlamaCppConfig(model_path=gguf, prompt_format=form, follow_up=follow_up), seed=0).follows_up
+        for form in ("chat", "completion") for follow_up in (True, False)
+    }
+    assert follows == {("chat", True): True, ("chat", False): False, ("completion", True): False, ("completion", False): False}
+
+
 def test_llamacpp_completion_form_continues_the_prompt_text(fake_llama_cpp, gguf):
     generator = make_generator(LlamaCppConfig(model_path=gguf, prompt_format="completion"), seed=0)
     [generation] = generator.generate(make_prompt(STARTER, text=PROMPT_TEXT), 1)

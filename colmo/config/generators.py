@@ -45,6 +45,10 @@ class LanguageModelConfig(GeneratorConfig):
         "chat", "chat: the prompt's messages through the model's chat template; completion: the prompt text, "
         "ending with the header of the function to write, for the model to continue (base and code models)",
     )
+    follow_up: bool = option(
+        True, "chat form: an answer that brings no new program (a copy, a name never defined) is answered in the same "
+        "conversation, the model told what was wrong; false: asked again from a new selection of the database",
+    )
     temperature: float = option(1.0, "sampling temperature")
     retry_temperature_step: float = option(
         0.25, "each regeneration of a duplicate answer (search.duplicate_retries) samples this much hotter ...",

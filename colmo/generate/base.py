@@ -62,7 +62,7 @@ class Generator(abc.ABC):
     options: ClassVar[type[GeneratorConfig]]  # the schema of its `llm` option
     wants_probe: ClassVar[bool] = False
     # Whether an answer that brings no new program is answered in the same conversation, the
-    # model told what was wrong (`colmo.answers.regenerate`): a chat model's can be.
+    # model told what was wrong (`colmo.answers.regenerate`): a chat model's, with `llm.follow_up`.
     follows_up: bool = False
 
     def __init__(self, cfg, seed: int, probe: Optional[Probe] = None) -> None:
@@ -95,7 +95,7 @@ class LanguageModelGenerator(Generator):
     def __init__(self, cfg, seed: int, probe: Optional[Probe] = None) -> None:
         super().__init__(cfg, seed, probe)
         self.chat = cfg.prompt_format == "chat"
-        self.follows_up = self.chat
+        self.follows_up = self.chat and cfg.follow_up
 
     def prefix(self, prompt: Prompt) -> str:
         """What an answer to `prompt` continues: nothing in the chat form, the prompt text in the completion form."""
