@@ -44,7 +44,7 @@ import math
 import re
 from typing import Iterator
 
-from colmo.astutil import bindings, bound_names, rename
+from colmo.astutil import bound_names, rename, unbound_names
 
 _FENCE = re.compile(r"\s*```")
 # Lines that can open a stretch of code (definition, import, assignment); prose rarely does.
@@ -350,8 +350,7 @@ def _add_missing_imports(module: ast.Module) -> None:
     used = {n.id for n in ast.walk(module) if isinstance(n, ast.Name)}
     missing = [ast.parse(line).body[0] for name, line in _MISSING_IMPORTS.items() if name in used - bound]
     # Names bound anywhere (a local `pi = 3.14`, an argument) are not the math module's.
-    bound_anywhere = {name for node in ast.walk(module) for name in bindings(node)}
-    from_math = sorted((used - bound_anywhere) & _MATH_NAMES)
+    from_math = sorted(set(unbound_names(module, ())) & _MATH_NAMES)
     if from_math:
         missing.append(ast.ImportFrom(module="math", names=[ast.alias(name) for name in from_math], level=0))
     module.body[:0] = missing
