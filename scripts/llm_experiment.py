@@ -36,7 +36,6 @@ import shlex
 import sqlite3
 import subprocess
 import sys
-from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional, Sequence
@@ -257,23 +256,23 @@ def call_yield(run_dir: Path, first: int) -> Optional[CallYield]:
         return None
     calls = evaluated = 0
     first_evaluated = None
-    answers, regenerations = Counter(), Counter()
+    answers = answered_at_once = regeneration_calls = evaluated_after_regeneration = 0
     for status, model_calls in rows:
         if status == PENDING:  # generated, not settled yet: neither counted nor anything after it
             break
         if calls + model_calls > first and first_evaluated is None:
             first_evaluated = evaluated
         if first_evaluated is None:  # every answer had a first call; model_calls - 1 generated it again
-            answers["calls"] += 1
-            answers["evaluated"] += status == EVALUATED and model_calls == 1
-            regenerations["calls"] += model_calls - 1
-            regenerations["evaluated"] += status == EVALUATED and model_calls > 1
+            answers += 1
+            answered_at_once += status == EVALUATED and model_calls == 1
+            regeneration_calls += model_calls - 1
+            evaluated_after_regeneration += status == EVALUATED and model_calls > 1
         calls, evaluated = calls + model_calls, evaluated + (status == EVALUATED)
     if calls >= first and first_evaluated is None:
         first_evaluated = evaluated
     return CallYield(
         run_dir.parent.name, int(run_dir.name[1:]), calls, evaluated, first_evaluated,
-        (answers["calls"], answers["evaluated"]), (regenerations["calls"], regenerations["evaluated"]),
+        (answers, answered_at_once), (regeneration_calls, evaluated_after_regeneration),
     )
 
 
