@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import sys
 from pathlib import Path
 from typing import Optional
@@ -44,13 +45,21 @@ def main(cfg: SearchConfig) -> Optional[float]:
     """Search for a control policy: a generator writes programs, a gradient-free optimizer tunes
     their constants in sandboxed MuJoCo simulation, the best go back into the prompts.
 
-    Returns the best training score (None if no program was evaluated): the objective a Hydra
-    sweeper such as Optuna's maximizes (colmo/conf/hydra/sweeper/optuna.yaml)."""
-    from colmo.progress import progress  # heavy imports only once the config is valid
+    Returns the best training score (None if the run has no result of its own): the objective a
+    Hydra sweeper such as Optuna's maximizes (colmo/conf/hydra/sweeper/optuna.yaml). A run with
+    no result ends with a line saying why and exit code 1; in a `-m` sweep the other jobs go on
+    and the sweep's end says which failed (`colmo.sweep_comparison`)."""
+    from hydra.types import RunMode
+
+    from colmo.budget import job_start
+
+    sweep_job = HydraConfig.get().mode == RunMode.MULTIRUN
+    started = job_start(sweep_job)  # before the heavy imports, which are the job's start-up
+    from colmo.progress import progress
     from colmo.search import Search
 
     run_dir = Path(HydraConfig.get().runtime.output_dir)
-    search = Search(cfg, run_dir, make_tracker(cfg.tracker).search_observers(cfg, run_dir))
+    search = Search(cfg, run_dir, make_tracker(cfg.tracker).search_observers(cfg, run_dir), started=started)
     with progress(search):
         summary = search.run()
     print(summary.best_code or "")
@@ -65,8 +74,15 @@ def main(cfg: SearchConfig) -> Optional[float]:
     if summary.resumable:
         overrides = " ".join(o for o in HydraConfig.get().overrides.task if not o.startswith("resume="))
         print(f"resume with: colmo {overrides} resume={summary.run_dir}".replace("  ", " "), file=sys.stderr)
-        sys.exit(130 if summary.stop_reason == "interrupted" else 1)
-    return summary.best_score
+    if summary.failure is None:
+        return summary.best_score
+    if summary.stop_reason == "interrupted":  # Ctrl-C stops a sweep too
+        sys.exit(130)
+    if not sweep_job:
+        print(f"colmo: error: {summary.failure}", file=sys.stderr)
+        sys.exit(1)
+    logging.getLogger("colmo").error("this job failed: %s", summary.failure)  # the sweep goes on, and ends saying so
+    return None
 
 
 if __name__ == "__main__":

@@ -1,5 +1,6 @@
-"""A search's time: the limit `search.max_seconds`, counted from the start of the process
-(imports and Hydra included); the search's own deadline, early enough to leave the programs in
+"""A search's time: the limit `search.max_seconds`, counted from the start of the run's job (a
+single run's process, imports and Hydra included; each job of a `-m` sweep from its own start,
+whichever launcher runs it: `job_start`); the search's own deadline, early enough to leave the programs in
 flight their final scores and the finish its held-out scores, simplification and video
 (`colmo.finish.plan_finish`, from the starter's calibration); and the run's estimated
 duration, said in one line before the first batch with the limit that binds.
@@ -58,16 +59,16 @@ class TimeBudget:
     enough for the finish and the drain of the `programs_in_flight()` at the workers' current speed."""
 
     def __init__(
-        self, max_seconds: float, programs_in_flight: Callable[[], int] = lambda: 0, elapsed: Optional[float] = None, tuned: bool = True,
+        self, max_seconds: float, programs_in_flight: Callable[[], int] = lambda: 0, elapsed: float = 0.0, tuned: bool = True,
     ):
-        """`elapsed`: seconds of the limit already spent (default: since the process started);
+        """`elapsed`: seconds of the limit already spent before now (the job's start-up);
         `tuned`: whether programs are tuned (their final scores are then a fast-path and a
         referee evaluation, not the referee's alone)."""
         self.max_seconds = max_seconds
         self.tuned = tuned
         self.programs_in_flight = programs_in_flight  # programs being tuned now (the search's program threads)
         self.start = time.perf_counter()
-        self.end = self.start - (process_seconds() if elapsed is None else elapsed) + max_seconds if max_seconds else math.inf
+        self.end = self.start - elapsed + max_seconds if max_seconds else math.inf
         self._starter_deadline = self.start + _STARTER_SHARE * (self.end - self.start)
         self.calibration = RefereeCost(0.0, 0.0)  # the starter's referee cost, from its calibration
         self._calibration_referee = 0.0  # the calibration's referee evaluation, worker seconds
@@ -223,6 +224,15 @@ class TimeBudget:
         if not self.max_seconds:
             return math.inf
         return time.monotonic() + max(self.end - _CLOSE_S - time.perf_counter(), 0.0)
+
+
+def job_start(sweep_job: bool) -> float:
+    """When a job's `search.max_seconds` began (`time.perf_counter()`): a single run's at the
+    process's start, so that the process ends by its limit; a sweep job's now, at the start of
+    its own work, since the jobs of a sweep may share one process (Hydra's basic launcher, the
+    joblib launcher's reused workers) and each must have the whole limit to itself."""
+    now = time.perf_counter()
+    return now if sweep_job else now - process_seconds()
 
 
 def process_seconds() -> float:

@@ -10,7 +10,7 @@ rendered (`colmo.render`) on its first held-out episode, into the run directory;
 optional, and none can fail the search: a missing OpenGL or a simplification that finds
 nothing to remove is a line in the log and in the summary.
 
-With `search.max_seconds`, the whole run (from the start of the process) must end by the limit,
+With `search.max_seconds`, the whole run (from its job's start: `colmo.budget.job_start`) must end by the limit,
 this work included: `plan_finish` estimates what each step costs from what the referee costs
 (`RefereeCost`: per episode, and per lockstep batch of episodes, measured on the starter and the
 search's programs) and, where the full work does not fit in the time it is given,
@@ -163,6 +163,7 @@ class BestPrograms:
 
     def summary(
         self, task: str, best: Optional["StoredProgram"], best_so_far: Sequence[tuple[int, float]], stop_reason: str, run_dir: Path, totals: Totals,
+        startup_seconds: float = 0.0,
     ) -> Summary:
         """A search's summary: its `best` program (None if it has none), with its held-out score
         where it got one, and these results."""
@@ -170,7 +171,8 @@ class BestPrograms:
         return Summary(
             task=task, best_score=best.score if best else None, best_heldout_score=best_heldout, best_key=best.key if best else None,
             best_code=best.code if best else None, best_so_far=tuple(best_so_far), stop_reason=stop_reason, run_dir=str(run_dir),
-            heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, robustness=self.robustness, **asdict(totals),
+            heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, robustness=self.robustness,
+            startup_seconds=startup_seconds, **asdict(totals),
         )
 
 

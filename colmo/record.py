@@ -180,6 +180,14 @@ class Summary(Totals):
     media: dict = field(default_factory=dict)  # the best policy's plot and video, relative to run_dir
     simplified: dict = field(default_factory=dict)  # the best policy simplified: scores, sizes, code
     robustness: dict = field(default_factory=dict)  # the best policy under model mismatch: headline scores, files in run_dir
+    # This process's start-up: from the job's start to the search's first batch (imports, the
+    # workers, the starter's calibration and tuning), seconds of `search.max_seconds` not searched.
+    startup_seconds: float = 0.0
+
+    @property
+    def failure(self) -> Optional[str]:
+        """Why this run has no result to compare (`shortfall`), or None."""
+        return shortfall(self.stop_reason, self.samples, self.programs_evaluated)
 
     @property
     def resumable(self) -> bool:
@@ -189,6 +197,19 @@ class Summary(Totals):
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
+
+
+def shortfall(stop_reason: str, samples: int, programs_evaluated: int) -> Optional[str]:
+    """Why a run (from its summary's fields) has no result to compare, or None: it stopped before
+    its limits (resume it), or it ended with no program of its own evaluated, so that its best
+    is the starter's score and says nothing of the search."""
+    if stop_reason not in FINISHED:
+        return f"stopped: {stop_reason}"
+    if programs_evaluated:
+        return None
+    if not samples and stop_reason == "max_seconds":
+        return "no sample searched: search.max_seconds left no time after the start-up"
+    return f"no program evaluated in {samples} sample{'s' * (samples != 1)}"
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ copied, or why its answer cannot be used); `max_samples` and the counters count 
 the regenerations included, so that samples mean model calls.
 
 Stopping: `search.max_samples`, `search.stop_at_score`, and `search.max_seconds`, a wall-clock
-limit of the whole run from the start of the process, with the search's own deadline before it
+limit of the whole run from its `started` (the job's start: `colmo.budget.job_start`), with the search's own deadline before it
 (`colmo.budget`: the finish's time and the programs in flight left over). At the search's
 deadline a generation in flight is abandoned and programs in flight stop tuning at their next
 candidate, their best so far scored and stored (`cut_short`). Ctrl-C and SIGTERM do the same; a
@@ -90,12 +90,14 @@ class _Batch:
 
 class Search:
     """One search run into `run_dir` (or the run `cfg.resume` names). `executor` and
-    `generator` are built from the config unless given (a test, a notebook, a benchmark)."""
+    `generator` are built from the config unless given (a test, a notebook, a benchmark).
+    `started`: when the run's time limit began (`time.perf_counter()`; default: now)."""
 
     def __init__(
         self, cfg: SearchConfig, run_dir: Path, observers: tuple[SearchObserver, ...] = (),
-        executor: Optional[Executor] = None, generator: Optional[Generator] = None,
+        executor: Optional[Executor] = None, generator: Optional[Generator] = None, started: Optional[float] = None,
     ):
+        self.started = time.perf_counter() if started is None else started
         self.cfg = cfg
         self.observers = observers
         self.spec: Spec = load_task_spec(cfg.task.spec)
@@ -117,7 +119,10 @@ class Search:
             cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop,
             observe=lambda result: self.budget.observe(result),
         )
-        self.budget = TimeBudget(cfg.search.max_seconds, self.outcomes.running, tuned=cfg.gfo.tunes_constants)
+        self.budget = TimeBudget(
+            cfg.search.max_seconds, self.outcomes.running, elapsed=time.perf_counter() - self.started, tuned=cfg.gfo.tunes_constants,
+        )
+        self.startup_seconds = 0.0  # from `started` to the first batch (set then)
         self.generation_thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
         self.evaluator: Optional[Evaluator] = None
         self.database: Optional[ProgramDatabase] = None
@@ -139,6 +144,7 @@ class Search:
                 self.best_so_far = [(0, self.database.best.score)]
                 to_evaluate = self._replay()
                 self._start_generator()
+                self.startup_seconds = time.perf_counter() - self.started
                 self._loop(to_evaluate)
             except (KeyboardInterrupt, ExecutorClosed):  # a signal before the handlers were in place, or a second one
                 self.stop_reason = self.stop_reason or "interrupted"
@@ -154,7 +160,10 @@ class Search:
                     until=self.budget.finish_by(), referee=self.budget.finish_referee_cost,
                 )
             best_program = self.database.best if self.database else None
-            summary = best.summary(self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals())
+            summary = best.summary(
+                self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals(),
+                self.startup_seconds or time.perf_counter() - self.started,  # a run that never searched spent it all starting
+            )
             write_outputs(summary, self.run_dir)
             for observer in self.observers:
                 observer.on_finish(summary)

@@ -5,20 +5,25 @@ of a sweep has ended (`on_multirun_end`) it reads what each job wrote in the swe
 `summary.json` and the overrides Hydra saved, whatever launcher ran it, and prints::
 
     sweep multirun/2026-12-02_18-20-00: 4 jobs
-      job  variant          best  held-out  samples
-        0  gfo=oneplusone  186.50   179.00       12
+      job  variant          best  held-out  samples  seconds
+        0  gfo=oneplusone  186.50   179.00       12     88.1
+        1  gfo=none        failed: no sample searched: search.max_seconds left no time after the start-up
         ...
     report: colmo-report experiment=pendulum sweep=3f2a...
 
-`variant` is what sets a job apart: its overrides less those every job shares. A job that
-wrote no summary (it failed or was killed) is a line saying so. The report line appears when
-the jobs were tracked in MLflow (`colmo.track`), naming the sweep by its id (`sweep_id`).
+`variant` is what sets a job apart: its overrides less those every job shares; `seconds`, its
+wall time. A job with no result to compare is a line saying why and never a score: it wrote no
+summary (it failed or was killed), stopped before its limits, or evaluated no program of its
+own (`colmo.record.shortfall`); the sweep then ends with one line naming them and exit code 1.
+The report line appears when the jobs were tracked in MLflow (`colmo.track`), naming the sweep
+by its id (`sweep_id`).
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Optional
@@ -26,6 +31,8 @@ from typing import Any, Optional
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
+from colmo.errors import EXIT_RUNTIME
+from colmo.record import shortfall
 from colmo.store import SUMMARY_FILE
 
 
@@ -44,6 +51,13 @@ class JobOutcome:
     summary: Optional[dict]
     tracking: Optional[dict]  # the job's `tracker` config, if it was tracked in MLflow
     task: str
+
+    @property
+    def failure(self) -> Optional[str]:
+        """Why this job has no result to compare, or None."""
+        if self.summary is None:
+            return "no summary: the job failed or was stopped"
+        return shortfall(self.summary.get("stop_reason", ""), self.summary.get("samples", 0), self.summary.get("programs_evaluated", 0))
 
 
 def read_jobs(sweep_dir: Path) -> list[JobOutcome]:
@@ -76,13 +90,14 @@ def comparison_lines(sweep_dir: Path, jobs: list[JobOutcome], shown_dir: Optiona
     variants = [" ".join(o for o in job.overrides if o not in shared) or "(all alike)" for job in jobs]
     width = max([len("variant"), *map(len, variants)])
     lines = [f"sweep {shown_dir or sweep_dir}: {len(jobs)} job{'s' * (len(jobs) != 1)}"]
-    lines.append(f"  {'job':>3}  {'variant':<{width}}  {'best':>8}  {'held-out':>8}  {'samples':>7}")
+    lines.append(f"  {'job':>3}  {'variant':<{width}}  {'best':>8}  {'held-out':>8}  {'samples':>7}  {'seconds':>7}")
     for job, variant in zip(jobs, variants):
-        if job.summary is None:
-            lines.append(f"  {job.number:>3}  {variant:<{width}}  no summary: the job failed or was stopped")
+        if job.failure is not None:
+            lines.append(f"  {job.number:>3}  {variant:<{width}}  failed: {job.failure}")
             continue
         best, heldout = _score(job.summary.get("best_score")), _score(job.summary.get("best_heldout_score"))
-        lines.append(f"  {job.number:>3}  {variant:<{width}}  {best:>8}  {heldout:>8}  {job.summary.get('samples', 0):>7}")
+        samples, seconds = job.summary.get("samples", 0), job.summary.get("seconds", 0.0)
+        lines.append(f"  {job.number:>3}  {variant:<{width}}  {best:>8}  {heldout:>8}  {samples:>7}  {seconds:>7.1f}")
     tracked = [job for job in jobs if job.tracking is not None]
     if tracked:
         names = list(dict.fromkeys(job.tracking.get("experiment") or job.task for job in tracked))
@@ -92,10 +107,26 @@ def comparison_lines(sweep_dir: Path, jobs: list[JobOutcome], shown_dir: Optiona
     return lines
 
 
+def failure_line(jobs: list[JobOutcome]) -> Optional[str]:
+    """The line a sweep with failed jobs ends with (None if every job has a result)."""
+    failed = [job.number for job in jobs if job.failure is not None]
+    if not failed:
+        return None
+    numbers = ", ".join(map(str, failed))
+    return f"colmo: error: {len(failed)} of {len(jobs)} jobs failed (job{'s' * (len(failed) > 1)} {numbers}): no result to compare"
+
+
 class CompareJobs(Callback):
-    """Prints `comparison_lines` of a sweep once all its jobs have ended."""
+    """Prints `comparison_lines` of a sweep once all its jobs have ended; a sweep with a failed
+    job then ends with `failure_line` and exit code 1 (Hydra notifies callbacks of a sweep's end
+    last one first, so this one, declared first in colmo/conf/search.yaml, comes after a user's)."""
 
     def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
         shown = Path(config.hydra.sweep.dir)
         sweep_dir = (Path(config.hydra.runtime.cwd) / shown).resolve()
-        print("\n".join(comparison_lines(sweep_dir, read_jobs(sweep_dir), shown)), flush=True)
+        jobs = read_jobs(sweep_dir)
+        print("\n".join(comparison_lines(sweep_dir, jobs, shown)), flush=True)
+        failed = failure_line(jobs)
+        if failed is not None:
+            print(failed, file=sys.stderr, flush=True)
+            sys.exit(EXIT_RUNTIME)

@@ -1,5 +1,5 @@
 """`search.max_seconds` is a wall-clock limit of the whole run: it ends within 5 s of it from the
-process's start, with the held-out score, simplified policy, video and plot it promises, says
+process's start (each job of a `-m` sweep has the whole limit from its own start), with the held-out score, simplified policy, video and plot it promises, says
 before the first batch how long it will take, and the programs whose tuning the deadline cut
 short are stored with their best constants so far (`cut_short`), rounded to 4 significant
 digits like every other program's, not thrown away."""
@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 from conftest import compose, run_colmo
 
-from colmo.budget import TimeBudget
+from colmo.budget import TimeBudget, job_start, process_seconds
 from colmo.finish import SAFETY, RefereeCost, plan_finish
 from colmo.render import PLOT_FILE, VIDEO_FILE
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, STORE_FILE, SUMMARY_FILE
@@ -76,6 +76,31 @@ def test_a_short_run_ends_within_5_s_of_its_limit_with_everything_it_promises(tm
         assert (run.run_dir / name).is_file(), (name, run.stderr[-3000:])
     assert run.summary["best_heldout_score"] is not None
     assert run.summary["media"]["video"] == VIDEO_FILE
+
+
+def test_each_job_of_a_sweep_searches_for_its_whole_limit(tmp_path):
+    """The jobs of a basic-launcher sweep share one process: the second job's limit counts from
+    its own start, not the process's (it used to find no time left and search 0 samples)."""
+    result = run_colmo(
+        "colmo", "-m", "seed=0,1", "search.max_seconds=30", "tracker=none", "search.progress=false", "task.episodes=1",
+        "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false", "executor.workers=1", "hydra.sweep.dir=sweep",
+        cwd=tmp_path, timeout=600,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    summaries = [json.loads(next((tmp_path / "sweep").glob(f"{job}_*/{SUMMARY_FILE}")).read_text()) for job in (0, 1)]
+    for summary in summaries:
+        assert summary["stop_reason"] == "max_seconds"
+        assert summary["samples"] > 0 and summary["programs_evaluated"] > 0, summary
+        assert 0 < summary["startup_seconds"] < summary["seconds"]
+
+
+def test_a_sweep_job_counts_its_limit_from_its_own_start_a_single_run_from_the_process_start():
+    before = time.perf_counter()
+    assert before <= job_start(sweep_job=True) <= time.perf_counter()
+    assert job_start(sweep_job=False) <= before - process_seconds() + 1e-3
+    budget = TimeBudget(60.0, elapsed=20.0)
+    assert budget.limit_seconds == pytest.approx(40.0)  # the start-up spent is not the search's
+    assert TimeBudget(60.0).limit_seconds == pytest.approx(60.0)
 
 
 @pytest.mark.slow

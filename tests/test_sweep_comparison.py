@@ -1,6 +1,7 @@
 """The end of a `-m` sweep: a real two-job sweep prints one line per job with the scores its
-summary holds, and a report command that selects exactly that sweep; a job that wrote no
-summary is a line saying so."""
+summary holds, and a report command that selects exactly that sweep; a job with no result (no
+summary, no program evaluated) is a line saying so, never a score, and the sweep exits 1 after
+running every other job."""
 
 import json
 import subprocess
@@ -10,7 +11,7 @@ from pathlib import Path
 from conftest import run_colmo
 from mlflow import MlflowClient
 
-from colmo.sweep_comparison import JobOutcome, comparison_lines
+from colmo.sweep_comparison import JobOutcome, comparison_lines, failure_line
 
 TINY = ("llm=mutate", "search.max_samples=2", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2", "evaluation.render=false",
         "evaluation.simplify=false", "executor.workers=1", "search.progress=false")
@@ -22,11 +23,12 @@ def test_a_sweep_ends_with_one_line_per_job_and_the_command_of_its_report(tmp_pa
     lines = result.stdout.splitlines()
     start = lines.index("sweep sweep: 2 jobs")
     heading, *rows = lines[start + 1: start + 4]
-    assert heading.split() == ["job", "variant", "best", "held-out", "samples"]
+    assert heading.split() == ["job", "variant", "best", "held-out", "samples", "seconds"]
     for number, row in enumerate(rows):
         summary = json.loads(next((tmp_path / "sweep").glob(f"{number}_*/summary.json")).read_text())
         assert row.split() == [
             str(number), f"seed={number}", f"{summary['best_score']:.2f}", f"{summary['best_heldout_score']:.2f}", str(summary["samples"]),
+            f"{summary['seconds']:.1f}",
         ]
     report = lines[start + 4]
     assert report.startswith("report: colmo-report experiment=pendulum sweep=")
@@ -44,13 +46,40 @@ def test_a_sweep_ends_with_one_line_per_job_and_the_command_of_its_report(tmp_pa
     assert "2 search runs read from MLflow" in text and "; 2 count, 0 left out" in text
 
 
-def test_a_job_without_a_summary_is_a_line_saying_so():
+def summary(**fields) -> dict:
+    return {"best_score": 180.0, "best_heldout_score": None, "samples": 4, "programs_evaluated": 3, "stop_reason": "max_samples",
+            "seconds": 12.25, **fields}
+
+
+def test_a_job_without_a_result_is_a_line_saying_why_never_a_score():
     jobs = [
-        JobOutcome(0, ("task=pendulum", "seed=0"), {"best_score": 180.0, "best_heldout_score": None, "samples": 4}, None, "pendulum"),
+        JobOutcome(0, ("task=pendulum", "seed=0"), summary(), None, "pendulum"),
         JobOutcome(1, ("task=pendulum", "seed=1"), None, None, "pendulum"),
+        JobOutcome(2, ("task=pendulum", "seed=2"), summary(samples=0, programs_evaluated=0, stop_reason="max_seconds"), None, "pendulum"),
+        JobOutcome(3, ("task=pendulum", "seed=3"), summary(samples=6, programs_evaluated=0), None, "pendulum"),
+        JobOutcome(4, ("task=pendulum", "seed=4"), summary(stop_reason="generator failed: the server stopped"), None, "pendulum"),
     ]
     lines = comparison_lines(Path("/runs/sweep"), jobs)
-    assert lines[0] == "sweep /runs/sweep: 2 jobs"
-    assert lines[2].split() == ["0", "seed=0", "180.00", "-", "4"]
-    assert lines[3].split()[:3] == ["1", "seed=1", "no"]
-    assert len(lines) == 4  # no tracked job: no report line
+    assert lines[0] == "sweep /runs/sweep: 5 jobs"
+    assert lines[2].split() == ["0", "seed=0", "180.00", "-", "4", "12.2"]
+    assert lines[3].split()[:4] == ["1", "seed=1", "failed:", "no"]
+    words = [" ".join(line.split()) for line in lines]
+    assert words[4] == "2 seed=2 failed: no sample searched: search.max_seconds left no time after the start-up"
+    assert words[5] == "3 seed=3 failed: no program evaluated in 6 samples"
+    assert words[6] == "4 seed=4 failed: stopped: generator failed: the server stopped"
+    assert "180.00" not in " ".join(lines[3:])
+    assert len(lines) == 7  # no tracked job: no report line
+    assert failure_line(jobs) == "colmo: error: 4 of 5 jobs failed (jobs 1, 2, 3, 4): no result to compare"
+    assert failure_line(jobs[:1]) is None
+
+
+def test_a_sweep_with_a_job_that_searched_nothing_runs_the_others_and_exits_1(tmp_path):
+    # A 1 s limit leaves no time to search after the start-up; the other job has no time limit.
+    result = run_colmo("colmo", "-m", "search.max_seconds=1,0", *TINY, "tracker=none", "hydra.sweep.dir=sweep", cwd=tmp_path, timeout=600)
+    assert result.returncode == 1, result.stderr
+    assert result.stderr.strip().splitlines()[-1] == "colmo: error: 1 of 2 jobs failed (job 0): no result to compare"
+    rows = result.stdout.splitlines()[-2:]
+    assert " ".join(rows[0].split()).startswith("0 search.max_seconds=1 failed: no sample searched")
+    finished = json.loads(next((tmp_path / "sweep").glob("1_*/summary.json")).read_text())
+    assert finished["samples"] == 2 and finished["programs_evaluated"] > 0
+    assert rows[1].split()[:3] == ["1", "search.max_seconds=0", f"{finished['best_score']:.2f}"]

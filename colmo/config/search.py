@@ -80,7 +80,8 @@ class SearchLoopConfig:
     # One hour by default: 1000 quadruped samples at one evaluation a second would take a day and
     # more, and a user should not have to know that to get a run that ends on its own.
     max_seconds: float = option(
-        3600.0, "wall-clock limit of the whole run from the process's start, held-out scores, simplification and video included; 0: none",
+        3600.0, "wall-clock limit of the whole run, held-out scores, simplification and video included, from the process's start "
+        "(in a -m sweep: from each job's own start); 0: none",
     )
     stop_at_score: Optional[float] = option(None, "stop once the best training score reaches this")
     queue_size: int = option(2, "batches in flight: generation overlaps evaluation")
