@@ -9,12 +9,18 @@ of a sweep has ended (`on_multirun_end`) it reads what each job wrote in the swe
         0  gfo=oneplusone  186.50   179.00       12     88.1
         1  gfo=none        failed: no sample searched: search.max_seconds left no time after the start-up
         ...
+      best score by setting, mean ± std over seeds (each seed), difference to the first:
+        gfo=oneplusone  372.10 ± 141.41 (392.50, 221.60, 502.20)
+        gfo=none        186.77 ± 10.06 (187.40, 196.50, 176.40)  -185.33, 95% interval [-312.40, -37.90]
     report: colmo-report experiment=pendulum sweep=3f2a...
 
 `variant` is what sets a job apart: its overrides less those every job shares; `seconds`, its
 wall time. A job with no result to compare is a line saying why and never a score: it wrote no
 summary (it failed or was killed), stopped before its limits, or evaluated no program of its
 own (`colmo.record.shortfall`); the sweep then ends with one line naming them and exit code 1.
+Where the sweep compares settings, not only seeds, each setting's scores follow, and its
+difference to the first setting with a bootstrap interval (`colmo.comparison`): "no
+significant difference" where the interval holds 0.
 The report line appears when the jobs were tracked in MLflow (`colmo.track`), naming the sweep
 by its id (`sweep_id`).
 """
@@ -31,6 +37,7 @@ from typing import Any, Optional
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
+from colmo.comparison import difference, mean_std
 from colmo.errors import EXIT_RUNTIME
 from colmo.record import shortfall
 from colmo.store import SUMMARY_FILE
@@ -98,6 +105,7 @@ def comparison_lines(sweep_dir: Path, jobs: list[JobOutcome], shown_dir: Optiona
         best, heldout = _score(job.summary.get("best_score")), _score(job.summary.get("best_heldout_score"))
         samples, seconds = job.summary.get("samples", 0), job.summary.get("seconds", 0.0)
         lines.append(f"  {job.number:>3}  {variant:<{width}}  {best:>8}  {heldout:>8}  {samples:>7}  {seconds:>7.1f}")
+    lines += variant_lines(jobs, variants)
     tracked = [job for job in jobs if job.tracking is not None]
     if tracked:
         names = list(dict.fromkeys(job.tracking.get("experiment") or job.task for job in tracked))
@@ -114,6 +122,35 @@ def failure_line(jobs: list[JobOutcome]) -> Optional[str]:
         return None
     numbers = ", ".join(map(str, failed))
     return f"colmo: error: {len(failed)} of {len(jobs)} jobs failed (job{'s' * (len(failed) > 1)} {numbers}): no result to compare"
+
+
+def _is_seed(override: str) -> bool:
+    return override.split("=", 1)[0].lstrip("+~") == "seed"
+
+
+def variant_lines(jobs: list[JobOutcome], variants: list[str]) -> list[str]:
+    """When the sweep compares settings (not only seeds): each setting's best scores over its
+    seeds (the jobs with a result), mean ± std and each seed's, and its difference to the first
+    setting with a bootstrap interval (`colmo.comparison`)."""
+    settings: dict[str, list[float]] = {}
+    for job, variant in zip(jobs, variants):
+        setting = " ".join(o for o in variant.split(" ") if not _is_seed(o)) or "(all alike)"
+        scores = settings.setdefault(setting, [])
+        if job.failure is None and job.summary.get("best_score") is not None:
+            scores.append(job.summary["best_score"])
+    if len(settings) < 2:
+        return []
+    width = max(map(len, settings))
+    lines = ["  best score by setting, mean ± std over seeds (each seed), difference to the first:"]
+    baseline = next(iter(settings.values()))
+    for index, (setting, scores) in enumerate(settings.items()):
+        if not scores:
+            lines.append(f"    {setting:<{width}}  no job with a result")
+            continue
+        seeds = ", ".join(f"{score:.2f}" for score in scores)
+        change = "" if index == 0 or not baseline else f"  {difference(baseline, scores).text(2)}"
+        lines.append(f"    {setting:<{width}}  {mean_std(scores, 2)} ({seeds}){change}")
+    return lines
 
 
 class CompareJobs(Callback):

@@ -12,6 +12,7 @@ from conftest import compose, refused, run_colmo
 from mlflow.entities import Metric
 from PIL import Image
 
+from colmo.comparison import difference
 from colmo.errors import ConfigError
 from colmo.report import AXES, default_out, mean_std, read_runs
 from colmo.report.__main__ import main as report_app
@@ -106,8 +107,26 @@ def test_table_one_has_training_and_heldout_rewards_over_the_seeds(store, monkey
     row = rows[1]
     assert row[:4] == ["pendulum", "3", "1", "oneplusone, budget 3"] and row[8] == "400"
     assert row[4] == mean_std([200.0, 100.0]) and row[5] == f"**{mean_std([420.0, 380.0])}**"  # the repeat does not count
-    assert row[6] == mean_std([180.0, 90.0]) and row[7] == "**400.0 (1/2 seeds)**"
+    assert row[6] == mean_std([180.0, 90.0]) and row[7] == "400.0 (1/2 seeds)"  # one seed: no interval, no winner
     assert row[9] == "not reached (0/2 seeds)" and row[10] == "8 (1/2 seeds)"
+
+
+def test_variants_are_compared_by_the_difference_of_means_with_its_interval_and_their_cost(store, monkeypatch):
+    cwd, _ = store
+    rows = table(report(cwd, monkeypatch, "out=compared"), "Variants compared")
+    assert rows[0][:5] == ["Task", "Variant", "Seeds", "Best score", "Difference to the baseline"]
+    baseline, tuned = rows[1], rows[2]
+    assert baseline[1:5] == ["no GFO", "2", mean_std([200.0, 100.0]), "baseline"]
+    best = difference([200.0, 100.0], [420.0, 380.0])
+    assert best.significant and tuned[4] == best.text() and tuned[4].startswith("+250.0, 95% interval [")
+    assert tuned[6] == "+265.0 (no interval: fewer than 2 seeds a side)"  # held-out: one seed of GFO has one
+    assert tuned[7] == "16 ± 0" and tuned[9] == "8 ± 0" and tuned[10] == "80 ± 0"  # wall s (the logged seconds), model calls, evaluations
+
+
+def test_a_difference_whose_interval_holds_0_is_said_to_be_none():
+    assert difference([201.3, 180.0], [222.8, 190.0]).text().endswith(": no significant difference")
+    assert not difference([201.3, 180.0], [222.8, 190.0]).significant
+    assert difference([187.4, 196.5, 176.4], [392.5, 221.6, 502.2]).low > 0
 
 
 def test_every_run_is_accounted_for(store, monkeypatch):

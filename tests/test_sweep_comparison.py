@@ -83,3 +83,21 @@ def test_a_sweep_with_a_job_that_searched_nothing_runs_the_others_and_exits_1(tm
     finished = json.loads(next((tmp_path / "sweep").glob("1_*/summary.json")).read_text())
     assert finished["samples"] == 2 and finished["programs_evaluated"] > 0
     assert rows[1].split()[:3] == ["1", "search.max_seconds=0", f"{finished['best_score']:.2f}"]
+
+
+def test_settings_compared_over_seeds_get_their_mean_and_the_difference_with_its_interval():
+    scores = {("gfo=none", 0): 187.4, ("gfo=none", 1): 196.5, ("gfo=none", 2): 176.4,
+              ("gfo=oneplusone", 0): 392.5, ("gfo=oneplusone", 1): 221.6, ("gfo=oneplusone", 2): 502.2}
+    jobs = [JobOutcome(number, (gfo, f"seed={seed}"), summary(best_score=score), None, "pendulum")
+            for number, ((gfo, seed), score) in enumerate(scores.items())]
+    jobs.append(JobOutcome(6, ("gfo=oneplusone", "seed=3"), summary(programs_evaluated=0), None, "pendulum"))  # no result: not counted
+    lines = comparison_lines(Path("/runs/sweep"), jobs)
+    start = next(i for i, line in enumerate(lines) if line.strip().startswith("best score by setting"))
+    none, tuned = (" ".join(line.split()) for line in lines[start + 1: start + 3])
+    assert none == "gfo=none 186.77 ± 10.06 (187.40, 196.50, 176.40)"
+    assert tuned.startswith("gfo=oneplusone 372.10 ± 141.41 (392.50, 221.60, 502.20) +185.33, 95% interval [+")
+    assert "no significant" not in tuned
+    close = [JobOutcome(n, (gfo, f"seed={n}"), summary(best_score=score), None, "pendulum")
+             for n, (gfo, score) in enumerate((("gfo=none", 201.3), ("gfo=none", 180.0), ("gfo=oneplusone", 222.8), ("gfo=oneplusone", 190.0)))]
+    assert comparison_lines(Path("/runs/sweep"), close)[-1].endswith(": no significant difference")
+    assert not any("by setting" in line for line in comparison_lines(Path("/runs/sweep"), jobs[:3]))  # seeds only: nothing to compare

@@ -22,8 +22,11 @@ Seeds are aggregated as mean ± sample std.
 
 `out/` receives
 - `report.md`: Table I (state and action dims, best training reward and held-out reward of the
-  best program, without and with GFO, samples to reach the task's `task.target_score`), one
-  line per run, where each run's samples and time went (valid programs, duplicates, tokens/s,
+  best program, without and with GFO, samples to reach the task's `task.target_score`; bold
+  only where the difference is significant), each variant against the baseline (the difference
+  of means with its bootstrap interval, "no significant difference" when it holds 0; the cost:
+  wall and worker seconds, model calls, evaluations: `colmo.comparison`), one line per
+  run, where each run's samples and time went (valid programs, duplicates, tokens/s,
   generator and evaluator busy), the runs left out and why, and each variant's best policy;
 - `best_so_far.png`: one panel per task, x = model calls (programs sampled), candidate
   evaluations or seconds of search (the first of `axis`, a comma-separated list of
@@ -43,9 +46,10 @@ from typing import Optional, Sequence
 
 from mlflow import MlflowClient
 
+from colmo.comparison import CONFIDENCE
 from colmo.report.figure import figure
 from colmo.report.selection import AXES, LATEST, group, read_runs
-from colmo.report.tables import best_policies, generation_table, left_out_lines, mean_std, runs_table, table_one
+from colmo.report.tables import best_policies, comparison_table, generation_table, left_out_lines, mean_std, runs_table, table_one
 from colmo.store import BEST_SO_FAR_PLOT
 
 __all__ = ["AXES", "default_out", "mean_std", "read_runs", "write_report"]
@@ -104,6 +108,17 @@ def write_report(
         "## Table I",
         "",
         *table_one(tasks),
+        "",
+        "A score is bold only where the difference of the two means is significant: its "
+        f"{CONFIDENCE:.0%} bootstrap interval (seeds resampled per variant) leaves out 0.",
+        "",
+        "## Variants compared",
+        "",
+        "Each variant against its task's baseline (its first variant without GFO): the difference of the mean "
+        "best score and of the mean held-out score, with its bootstrap interval, and what the variant cost, "
+        "mean ± std over its seeds: wall seconds, the evaluation workers' busy seconds, model calls, candidate evaluations.",
+        "",
+        *comparison_table(tasks),
         "",
         "## Best so far",
         "",

@@ -1,25 +1,20 @@
-"""The report's Markdown: Table I (the paper's, with held-out scores beside training ones),
-one line per run, the runs left out, and each variant's best policy."""
+"""The report's Markdown: Table I (the paper's, with held-out scores beside training ones; a
+score bold only where its difference to the other is significant), each variant against the
+task's baseline with the difference's interval and the cost of each, one line per run, the
+runs left out, and each variant's best policy."""
 
 from __future__ import annotations
 
-import statistics
 import tempfile
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import Callable, Optional, Sequence
 
 from mlflow import MlflowClient
 from mlflow.entities import Run
 
-from colmo.report.selection import Variant
+from colmo.comparison import difference, mean_std
+from colmo.report.selection import RunCurves, Variant
 from colmo.store import BEST_POLICY_FILE
-
-
-def mean_std(values: Sequence[float], digits: int = 1) -> str:
-    """`mean ± sample std`; the mean alone for one value."""
-    if len(values) == 1:
-        return f"{values[0]:.{digits}f}"
-    return f"{statistics.mean(values):.{digits}f} ± {statistics.stdev(values):.{digits}f}"
 
 
 def reward_cell(variant: Optional[Variant]) -> str:
@@ -45,13 +40,22 @@ def target_cell(variant: Optional[Variant]) -> str:
     return f"{mean_std(reached, 0)} {count}" if reached else f"not reached {count}"
 
 
-def _bold_better(cells: list[str], variants: Sequence[Optional[Variant]], value) -> list[str]:
-    """Bold the better mean of the two, as the paper does."""
-    values = ([value(run) for run in variant.runs if value(run) is not None] if variant else [] for variant in variants)
-    means = [statistics.mean(v) if v else None for v in values]
-    if None in means:
+def _values(variant: Variant, value: Callable[[RunCurves], Optional[float]]) -> list[float]:
+    return [value(run) for run in variant.runs if value(run) is not None]
+
+
+def _bold_better(cells: list[str], variants: Sequence[Optional[Variant]], value: Callable[[RunCurves], Optional[float]]) -> list[str]:
+    """Bold the better of the two, as the paper does, but only where the difference of their
+    means is significant (its bootstrap interval leaves out 0)."""
+    if None in variants:
         return cells
-    better = means.index(max(means))
+    baseline, other = (_values(variant, value) for variant in variants)
+    if not baseline or not other:
+        return cells
+    change = difference(baseline, other)
+    if not change.significant:
+        return cells
+    better = 1 if change.mean > 0 else 0
     return [f"**{cell}**" if index == better else cell for index, cell in enumerate(cells)]
 
 
@@ -85,6 +89,53 @@ def table_one(tasks: dict[str, list[Variant]]) -> list[str]:
     return lines
 
 
+def baseline_of(variants: list[Variant]) -> Variant:
+    """What a task's variants are compared with: its first variant without GFO, else its first."""
+    return next((v for v in variants if not v.gfo), variants[0])
+
+
+def _seconds(run: RunCurves) -> float:
+    info = run.run.info
+    return run.run.data.metrics.get("seconds", (info.end_time - info.start_time) / 1000)
+
+
+def _worker_seconds(run: RunCurves) -> Optional[float]:
+    """The evaluation workers' busy seconds: CPU time the evaluations took."""
+    busy, workers = run.run.data.metrics.get("evaluator_busy"), run.run.data.params.get("executor.workers")
+    return None if busy is None or workers is None else busy * _seconds(run) * int(workers)
+
+
+def _mean_cell(values: list[float], digits: int = 0) -> str:
+    return mean_std(values, digits) if values else "—"
+
+
+def comparison_table(tasks: dict[str, list[Variant]]) -> list[str]:
+    """Each variant against its task's baseline: the difference of the mean best score and of
+    the mean held-out score with their bootstrap intervals (`colmo.comparison`), and what each
+    variant cost, mean ± std over its seeds: wall seconds, the workers' busy seconds, model
+    calls and candidate evaluations."""
+    lines = [
+        "| Task | Variant | Seeds | Best score | Difference to the baseline | Held-out | Difference to the baseline "
+        "| Wall s | Worker s | Model calls | Evaluations |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for task, variants in tasks.items():
+        baseline = baseline_of(variants)
+        for variant in variants:
+            cells = []
+            for value in (lambda run: run.final, lambda run: run.heldout):
+                mine, theirs = _values(variant, value), _values(baseline, value)
+                change = "baseline" if variant is baseline else (difference(theirs, mine).text() if mine and theirs else "—")
+                cells += [_mean_cell(mine, 1), change]
+            cost = [
+                _mean_cell([_seconds(run) for run in variant.runs]), _mean_cell(_values(variant, _worker_seconds)),
+                _mean_cell([float(run.steps[-1]) for run in variant.runs]),
+                _mean_cell(_values(variant, lambda run: run.run.data.metrics.get("evaluations"))),
+            ]
+            lines.append(f"| {task} | {variant.name} | {len(variant.runs)} | {' | '.join(cells)} | {' | '.join(cost)} |")
+    return lines
+
+
 def runs_table(tasks: dict[str, list[Variant]]) -> list[str]:
     lines = [
         "| Run | Variant | Seed | Best score | Held-out | Samples | Evaluations | Samples to target | Seconds | Overrides |",
@@ -96,7 +147,7 @@ def runs_table(tasks: dict[str, list[Variant]]) -> list[str]:
                 info, metrics = run.run.info, run.run.data.metrics
                 reached = run.samples_to_target
                 evaluations = metrics.get("evaluations")
-                seconds = metrics.get("seconds", (info.end_time - info.start_time) / 1000)
+                seconds = _seconds(run)
                 lines.append(
                     f"| {info.run_name} | {variant.name} | {run.seed} | {run.final:.1f} | "
                     f"{'—' if run.heldout is None else f'{run.heldout:.1f}'} | {run.steps[-1]} | "
