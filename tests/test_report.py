@@ -255,3 +255,40 @@ def test_the_latest_sweep_is_compared_alone_with_a_legend_and_markers(store):
     assert handles[0].get_color() != handles[1].get_color()
     assert any(line.get_marker() == "o" and len(line.get_xdata()) == 1 for line in ax.get_lines())  # o0's single point
     assert len(ax.collections) == 2  # a band per variant of two seeds
+
+
+def test_a_variant_mean_and_band_are_drawn_only_where_every_seed_has_data():
+    from matplotlib.figure import Figure
+
+    from colmo.report.figure import draw_seeds
+
+    ax = Figure().subplots()
+    # seed 0 starts late (at 10) and runs to 40; seed 1 runs from 0 to 20: the mean is defined on [10, 20] only
+    draw_seeds(ax, "v", [([10.0, 30.0, 40.0], [180.0, 190.0, 200.0]), ([0.0, 5.0, 20.0], [50.0, 60.0, 70.0])], "tab:red")
+    mean = next(line for line in ax.get_lines() if line.get_label() == "v (2 seeds)")
+    assert list(mean.get_xdata()) == [10.0, 20.0] and list(mean.get_ydata()) == [120.0, 125.0]
+    ax = Figure().subplots()
+    draw_seeds(ax, "w", [([0.0, 1.0], [1.0, 2.0]), ([5.0, 6.0], [3.0, 4.0])], "tab:blue")  # no common range
+    assert [line.get_label() for line in ax.get_lines()][-1] == "w (2 seeds), no common range" and not ax.collections
+
+
+def test_the_caption_says_whether_budgets_were_equal_on_the_axis(store):
+    from colmo.report import group
+    from colmo.report.figure import budget_note
+
+    _, client = store
+    tasks = group(read_runs(client, ["pendulum"]).curves)
+    assert budget_note(tasks, "samples").startswith("Equal budgets on this axis: every run ends at 8 ")
+    tasks["pendulum"][0].runs[0].x[-1] = 16.0
+    assert budget_note(tasks, "samples").startswith("Unequal budgets on this axis: the runs end between 8 and 16 ")
+
+
+def test_a_run_that_evaluated_no_program_of_its_own_is_left_out(store):
+    _, client = store
+    experiment_id = client.create_experiment("nothing-evaluated")
+    log_run(client, experiment_id, 1, Logged("searched", "none", 0, [1.0, 2.0], None))
+    empty = log_run(client, experiment_id, 2, Logged("starter-only", "none", 1, [1.0], None))
+    client.log_metric(empty, "programs_evaluated", 0.0, step=4)
+    reading = read_runs(client, ["nothing-evaluated"])
+    assert [c.run.info.run_name for c in reading.curves] == ["searched"]
+    assert [(run.info.run_name, reason.split(":")[0]) for run, reason in reading.left_out] == [("starter-only", "no program of its own evaluated")]

@@ -31,8 +31,9 @@ Seeds are aggregated as mean ± sample std.
 - `best_so_far.png`: one panel per task, x = model calls (programs sampled), candidate
   evaluations or seconds of search (the first of `axis`, a comma-separated list of
   samples, evaluations, seconds; default `samples,seconds`); one colour per variant, named in
-  the legend: its mean over seeds (thick), the band from its lowest to its highest seed, each
-  seed thin; a curve of one point is a marker; dotted: the target;
+  the legend: each seed thin, and where every seed has data its mean over seeds (thick) and
+  the band from its lowest to its highest seed; a curve of one point is a marker; dotted: the
+  target; the caption says whether the runs' budgets were equal on the axis;
 - `best_so_far_<axis>.png`: the same against each further axis, so GFO and no GFO compare
   per model call and per second (what GFO spends to make each sample count).
 """
@@ -47,7 +48,7 @@ from typing import Optional, Sequence
 from mlflow import MlflowClient
 
 from colmo.comparison import CONFIDENCE
-from colmo.report.figure import figure
+from colmo.report.figure import budget_note, figure
 from colmo.report.selection import AXES, LATEST, group, read_runs
 from colmo.report.tables import best_policies, comparison_table, generation_table, left_out_lines, mean_std, runs_table, table_one
 from colmo.store import BEST_SO_FAR_PLOT
@@ -85,12 +86,15 @@ def write_report(
         raise ValueError(f"no finished runs with metrics in experiment(s) {', '.join(experiments)}")
     out.mkdir(parents=True, exist_ok=True)
     figure(tasks, axis).savefig(out / BEST_SO_FAR_PLOT, dpi=130)
-    plots = [f"![best so far against {AXES[axis][1]}]({BEST_SO_FAR_PLOT})", "", f"x: {AXES[axis][1]}."]
+    plots = [f"![best so far against {AXES[axis][1]}]({BEST_SO_FAR_PLOT})", "", f"x: {AXES[axis][1]}. {budget_note(tasks, axis)}"]
     for other in further:
         other_tasks = group(read_runs(client, experiments, other, sweep).curves)
         if other_tasks:  # runs logged before colmo logged the axis's metric have no curve on it
             figure(other_tasks, other).savefig(out / plot_file(other, first=False), dpi=130)
-            plots += ["", f"![best so far against {AXES[other][1]}]({plot_file(other, first=False)})", "", f"x: {AXES[other][1]}."]
+            plots += [
+                "", f"![best so far against {AXES[other][1]}]({plot_file(other, first=False)})", "",
+                f"x: {AXES[other][1]}. {budget_note(other_tasks, other)}",
+            ]
     count = len(reading.curves)
     lines = [
         f"# colmo report: {', '.join(experiments)}",
@@ -124,8 +128,8 @@ def write_report(
         "",
         *plots,
         "",
-        "One colour per variant (legend): thick, the mean over seeds; band, lowest to highest seed; "
-        "thin, each seed; a marker, a run of one batch.",
+        "One colour per variant (legend): thin, each seed on its own clock; thick, the mean over seeds and band, "
+        "lowest to highest seed, where every seed has data; a marker, a run of one batch.",
         "",
         "## Runs",
         "",

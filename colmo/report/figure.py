@@ -1,7 +1,9 @@
 """The report's figure, the paper's Fig. 4: best score so far against model calls, candidate
-evaluations or seconds, one panel per task; per variant (one colour each, in the legend) the
-mean over seeds with a band from the lowest to the highest seed, and each seed's curve thin.
-A curve of one point (a search that ended after its first batch) is drawn as a marker."""
+evaluations or seconds, one panel per task; per variant (one colour each, in the legend) each
+seed's curve thin on its own clock, and the mean over seeds with a band from the lowest to the
+highest seed where every seed has data. A curve of one point (a search that ended after its
+first batch) is drawn as a marker. `budget_note` says whether the runs' budgets were equal on
+the axis (the caption)."""
 
 from __future__ import annotations
 
@@ -18,28 +20,41 @@ COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:b
 
 
 def draw_seeds(ax: Axes, name: str, seeds: Sequence[tuple[Sequence[float], Sequence[float]]], color: str) -> None:
-    """One variant's best-so-far curves, `(x, best)` per seed: their mean (a step curve on the
-    union of their x), the band between the lowest and highest seed, and each seed thin; a
-    single point as a marker."""
+    """One variant's best-so-far curves, `(x, best)` per seed: each seed thin, on its own x;
+    their mean (a step curve) and the band between the lowest and highest seed only where every
+    seed has data, from the latest first point to the earliest last one, so that the mean never
+    mixes seeds that have started or ended with those that have not; a single point as a marker."""
     label = f"{name} ({len(seeds)} seed{'s' if len(seeds) != 1 else ''})"
     for x, best in seeds:
         ax.plot(x, best, color=color, linewidth=0.8, alpha=0.5, drawstyle="steps-post", marker="o" if len(x) == 1 else None)
-    grid = np.unique(np.concatenate([np.asarray(x, dtype=float) for x, _ in seeds]))
-    # Best so far is a step function: each seed's value at x is its last one at or before x
-    # (undefined before its first batch, and held after its last).
-    values = np.full((len(seeds), len(grid)), np.nan)
-    for row, (x, best) in enumerate(seeds):
-        index = np.searchsorted(np.asarray(x, dtype=float), grid, side="right") - 1
-        values[row, index >= 0] = np.asarray(best)[index[index >= 0]]
-    defined = ~np.isnan(values).all(axis=0)
-    grid, values = grid[defined], values[:, defined]
-    mean = np.nanmean(values, axis=0)
+    xs = [np.asarray(x, dtype=float) for x, _ in seeds]
+    grid = np.unique(np.concatenate(xs))
+    grid = grid[(grid >= max(x[0] for x in xs)) & (grid <= min(x[-1] for x in xs))]
+    if not len(grid):  # no x where every seed has data: the seeds alone, labelled
+        ax.plot([], [], color=color, linewidth=2.2, label=f"{label}, no common range")
+        return
+    # Best so far is a step function: each seed's value at x is its last one at or before x.
+    values = np.array([np.asarray(best, dtype=float)[np.searchsorted(x, grid, side="right") - 1] for x, (_, best) in zip(xs, seeds)])
+    mean = values.mean(axis=0)
     if len(grid) == 1:
         ax.plot(grid, mean, color=color, linestyle="none", marker="o", markersize=8, label=label)
     else:
         ax.plot(grid, mean, color=color, linewidth=2.2, drawstyle="steps-post", label=label)
     if len(seeds) > 1:
-        ax.fill_between(grid, np.nanmin(values, axis=0), np.nanmax(values, axis=0), color=color, alpha=0.18, step="post", linewidth=0)
+        ax.fill_between(grid, values.min(axis=0), values.max(axis=0), color=color, alpha=0.18, step="post", linewidth=0)
+
+
+def budget_note(tasks: dict[str, list[Variant]], axis: str) -> str:
+    """Whether the runs had equal budgets on `axis`: where they all end at the same x, the
+    curves compare at equal budgets; else the range of their ends, and where to compare."""
+    ends = [run.x[-1] for variants in tasks.values() for variant in variants for run in variant.runs]
+    unit = AXES[axis][1]
+    if max(ends) <= 1.02 * min(ends):
+        return f"Equal budgets on this axis: every run ends at {min(ends):g} ({unit})."
+    return (
+        f"Unequal budgets on this axis: the runs end between {min(ends):g} and {max(ends):g} ({unit}); "
+        "a variant's mean and band stop where its first seed ends, and variants compare only where both have data."
+    )
 
 
 def figure(tasks: dict[str, list[Variant]], axis: str = "samples") -> Figure:

@@ -154,7 +154,7 @@ def _setting_key(params: dict[str, str]) -> dict[str, str]:
 def read_runs(client: MlflowClient, experiments: Sequence[str], axis: str = "samples", sweep: str = LATEST) -> Reading:
     """The finished search runs of one sweep of `experiments` (`select_sweep`) with their
     best-so-far histories against `axis`; the latest of each repeat (same settings and seed) counts, the others are left out
-    with the reason, and so are runs that did not finish or have no curve."""
+    with the reason, and so are runs that did not finish, evaluated no program or have no curve."""
     ids = []
     for name in experiments:
         experiment = client.get_experiment_by_name(name)
@@ -170,6 +170,9 @@ def read_runs(client: MlflowClient, experiments: Sequence[str], axis: str = "sam
         params, run_id = run.data.params, run.info.run_id
         if run.info.status != "FINISHED":
             left_out.append((run, f"status {run.info.status}"))
+            continue
+        if run.data.metrics.get("programs_evaluated") == 0:
+            left_out.append((run, "no program of its own evaluated: no result (its best is the starter's)"))
             continue
         settings = tuple(sorted(_setting_key(params).items()))
         if settings in counted:
