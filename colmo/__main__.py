@@ -30,12 +30,17 @@ def check_inputs(cfg: SearchConfig) -> None:
 
 
 def check_servers(cfg: SearchConfig) -> None:
-    """`RunError` unless one of `llm.base_url`'s servers answers: the generator is started (it
-    asks each server for its models) and closed again; the search starts its own."""
+    """`RunError` unless one of `llm.base_url`'s servers answers a real request: the generator is
+    started (it asks each server for its models), sends one request of a one-token answer, and is
+    closed again; the search starts its own."""
     from colmo.generate import GeneratorError, make_generator
 
     try:
-        make_generator(cfg.llm, cfg.seed).close()
+        generator = make_generator(cfg.llm, cfg.seed)
+        try:
+            generator.check_request()
+        finally:
+            generator.close()
     except GeneratorError as error:
         raise RunError(f"llm={cfg.llm.name}: {error}") from None
 

@@ -91,7 +91,7 @@ def compose(config_name: str, *overrides: str):
 
 class FakeOpenAIServer:
     """An OpenAI-compatible chat-completions server on 127.0.0.1 whose next answers can be
-    scripted: "500", "429", "400", "garbage" (not JSON), "html" (not a completion), "empty",
+    scripted: "500", "429", "400", "404", "501", "garbage" (not JSON), "html" (not a completion), "empty",
     "stall" (answers only after `stall_s`, past any sensible client timeout)."""
 
     def __init__(self, honour_n: bool = True, delay: float = 0.0, stall_s: float = 3.0):
@@ -117,7 +117,7 @@ class FakeOpenAIServer:
                 with owner._lock:
                     owner._active -= 1
                 n = body.get("n", 1) if honour_n else 1
-                if behaviour in ("500", "429", "400"):
+                if behaviour in ("500", "429", "400", "404", "501"):
                     self.reply(int(behaviour), {"error": {"message": f"scripted {behaviour}", "type": "error"}})
                 elif behaviour == "garbage":
                     self.reply(200, b"{not json", content_type="application/json")

@@ -11,7 +11,7 @@ from importlib import resources
 from pathlib import Path
 
 import pytest
-from conftest import refused
+from conftest import FakeOpenAIServer, refused
 from mlflow import MlflowClient
 
 from colmo.__main__ import main as colmo
@@ -179,3 +179,19 @@ def test_an_openai_server_that_does_not_answer_is_one_line_exit_1_before_anythin
     code, line = refused(colmo, "-m", "llm=openai", f"llm.base_url=http://127.0.0.1:{port}/v1", "seed=0,1", *TINY)
     assert code == 1 and "no OpenAI-compatible server answers" in line
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("status", ["404", "501"])
+def test_an_openai_server_that_answers_but_serves_no_completion_is_one_line_exit_1_before_anything_exists(tmp_path, status):
+    """It answers `/v1/models` (any HTTP answer), so only a real request shows it serves nothing;
+    it used to pass the start-up check, and a search against it ended with 0 samples and exit 0."""
+    fake = FakeOpenAIServer()
+    try:
+        fake.script = [status]
+        result = script("colmo", "llm=openai", f"llm.base_url={fake.url}", *TINY, cwd=tmp_path)
+        line = one_error_line(result, 1)
+        assert line.startswith(f"colmo: error: llm=openai: no server serves a chat completion of model 'Qwen/Qwen2.5-Coder-7B-Instruct': {fake.url} answered HTTP {status}"), line
+        assert [request["body"]["max_tokens"] for request in fake.requests] == [1]  # one request of one token
+        assert not list(tmp_path.iterdir())  # no output directory, no MLflow store
+    finally:
+        fake.close()

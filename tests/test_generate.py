@@ -277,6 +277,22 @@ def test_openai_gives_up_after_consecutive_failures(server):
     assert "\n" not in message
 
 
+@pytest.mark.parametrize("answers, serves", [(["ok"], True), (["500"], True), (["429"], True), (["400"], False), (["501"], False)])
+def test_the_start_up_request_tells_a_server_that_serves_completions_from_one_that_does_not(server, answers, serves):
+    """Busy answers count as serving (the search retries them); a refusal or 501 does not."""
+    server.script = list(answers)
+    generator = make_generator(openai_config(server.url), seed=0)
+    try:
+        if serves:
+            generator.check_request()
+        else:
+            with pytest.raises(GeneratorError, match=rf"no server serves a chat completion of model .*: {server.url} answered HTTP {answers[0]}"):
+                generator.check_request()
+    finally:
+        generator.close()
+    assert [(r["path"], r["body"]["max_tokens"]) for r in server.requests] == [("/v1/chat/completions", 1)]
+
+
 def test_openai_raises_at_once_when_the_server_refuses_the_request(server):
     server.script = ["400"]
     generator = make_generator(openai_config(server.url), seed=0)

@@ -113,6 +113,31 @@ class OpenAIGenerator(LanguageModelGenerator):
         for server in silent:
             logger.warning("openai: %s does not answer; using the other servers until it does", server)
 
+    def check_request(self) -> None:
+        """One real request, a one-token answer for `llm.model` in the run's prompt form, to each
+        server until one answers it; `GeneratorError` naming what each server answered if none
+        does (a server that answers anything but serves no completions: a wrong path or model
+        name, HTTP 404 or 501). Busy answers (408, 409, 429, 5xx other than 501: a llama.cpp
+        server still loading its model answers 503) count as serving: the search retries them.
+        The start-up check (`colmo.__main__.check_inputs`) runs it before anything is created."""
+        refusals = []
+        for server in self._servers:
+            client = server.client.with_options(timeout=self.cfg.timeout_s)
+            try:
+                if self.chat:
+                    client.chat.completions.create(model=self.cfg.model, messages=[{"role": "user", "content": "Say OK."}], max_tokens=1)
+                else:
+                    client.completions.create(model=self.cfg.model, prompt="def policy(obs):\n", max_tokens=1)
+                return
+            except openai.APIStatusError as error:
+                if error.status_code != 501 and (error.status_code in _RETRYABLE_STATUS or error.status_code >= 500):
+                    return
+                refusals.append(f"{server.url} answered HTTP {error.status_code} ({one_line(error)})")
+            except (openai.APIError, ValueError) as error:
+                refusals.append(f"{server.url}: {describe_error(error)}")
+        form = "chat completion" if self.chat else "completion"
+        raise GeneratorError(f"no server serves a {form} of model {self.cfg.model!r}: {'; '.join(refusals)}")
+
     def generate(self, prompt: Prompt, n: int) -> list[Generation]:
         generations = self._complete(prompt, n, self.request_seed()) if self._use_n and n > 1 else []
         seeds = [self.request_seed() for _ in range(n - len(generations))]
