@@ -39,7 +39,6 @@ from colmo.config import SearchConfig
 from colmo.evaluation import Executor
 from colmo.finish import FINISH_SHARE, SAFETY, FinishPlan, RefereeCost, plan_finish
 from colmo.optimize.tune import ProgramResult
-from colmo.progress import duration
 
 log = logging.getLogger("colmo.search")
 
@@ -224,6 +223,14 @@ class TimeBudget:
         if not self.max_seconds:
             return math.inf
         return time.monotonic() + max(self.end - _CLOSE_S - time.perf_counter(), 0.0)
+
+
+def duration(seconds: Optional[float]) -> str:
+    """`12m05s`, `3h20m`; `?` for an unknown or endless duration."""
+    if seconds is None or not math.isfinite(seconds):
+        return "?"
+    minutes, secs = divmod(int(seconds), 60)
+    return f"{minutes // 60}h{minutes % 60:02d}m" if minutes >= 60 else f"{minutes}m{secs:02d}s"
 
 
 def job_start(sweep_job: bool) -> float:

@@ -32,34 +32,10 @@ from pathlib import Path
 from typing import Any, Callable, NoReturn, Optional, Protocol
 
 import hydra
-from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from colmo import config
+from colmo.config.schemas import CONFIG_MODULE, SCHEMAS, register_schemas
 from colmo.errors import EXIT_RUNTIME, EXIT_USAGE, ConfigError, RunError, one_line
-
-CONFIG_MODULE = "colmo.conf"  # the bundled configs (colmo/conf/)
-# Schemas by the name the YAML options put in their defaults list.
-SCHEMAS: dict[tuple[Optional[str], str], type] = {
-    ("task", "schema"): config.TaskConfig,
-    ("gfo", "schema"): config.GFOConfig,
-    ("gfo", "bo_schema"): config.BOConfig,
-    ("executor", "schema"): config.ExecutorConfig,
-    ("executor", "ray_schema"): config.RayExecutorConfig,
-    ("database", "schema"): config.DatabaseConfig,
-    ("tracker", "schema"): config.TrackerConfig,
-    ("tracker", "mlflow_schema"): config.MlflowConfig,
-    ("llm", "mutate_schema"): config.MutateConfig,
-    ("llm", "openai_schema"): config.OpenAIConfig,
-    ("llm", "vllm_schema"): config.VLLMConfig,
-    ("llm", "llamacpp_schema"): config.LlamaCppConfig,
-    (None, "search_schema"): config.SearchConfig,
-    (None, "optimize_schema"): config.OptimizeConfig,
-    (None, "evaluate_schema"): config.EvaluateConfig,
-    (None, "simplify_schema"): config.SimplifyAppConfig,
-    (None, "render_schema"): config.RenderConfig,
-    (None, "report_schema"): config.ReportConfig,
-}
 
 
 def to_objects(cfg: DictConfig) -> Any:
@@ -73,12 +49,6 @@ def to_objects(cfg: DictConfig) -> Any:
     except Exception as error:
         cause = error.__cause__ if isinstance(error.__cause__, ConfigError) else error
         raise ConfigError(one_line(cause)) from None
-
-
-def register_schemas() -> None:
-    store = ConfigStore.instance()
-    for (group, name), schema in SCHEMAS.items():
-        store.store(group=group, name=name, node=schema)
 
 
 def compose(config_name: str, overrides: list[str], output_dir: Optional[bool] = None) -> Any:

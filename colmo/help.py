@@ -16,7 +16,7 @@ from typing import Optional
 from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
 
 from colmo import config
-from colmo.cli import CONFIG_MODULE, register_schemas
+from colmo.config.schemas import CONFIG_MODULE, register_schemas
 
 _HELP_WIDTH = 100
 

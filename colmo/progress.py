@@ -25,6 +25,8 @@ from rich.logging import RichHandler
 from rich.progress_bar import ProgressBar
 from rich.table import Table
 
+from colmo.budget import duration
+
 if TYPE_CHECKING:
     from colmo.search import Search
 
@@ -108,14 +110,6 @@ class Snapshot:
     def lines(self) -> tuple[str, str, str, str]:
         """The numbers in four short lines (the live display, under 100 columns)."""
         return f"{self.fraction_done():4.0%} | {self._left()}", self._counts(), self._scores(), self._busy()
-
-
-def duration(seconds: Optional[float]) -> str:
-    """`12m05s`, `3h20m`; `?` for an unknown or endless duration."""
-    if seconds is None or not math.isfinite(seconds):
-        return "?"
-    minutes, secs = divmod(int(seconds), 60)
-    return f"{minutes // 60}h{minutes % 60:02d}m" if minutes >= 60 else f"{minutes}m{secs:02d}s"
 
 
 def snapshot(search: "Search") -> Snapshot:

@@ -50,6 +50,7 @@ from colmo.finish import BestPrograms, finish
 from colmo.generate import GENERATORS, Generation, Generator, GeneratorError, make_generator
 from colmo.generate.probe import ProgramProbe
 from colmo.heldout import training_evaluator
+from colmo.optimize.methods import tunes_constants
 from colmo.outcomes import SampleOutcomes
 from colmo.program import parametrize
 from colmo.prompt import Prompt, build_prompt
@@ -113,14 +114,14 @@ class Search:
         self.next_sample = self.next_batch = self.in_flight_samples = self.resumed_samples = 0
         self.generation_seconds = 0.0
         self.stop_reason = ""
-        self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=cfg.gfo.tunes_constants)
+        self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=tunes_constants(cfg.gfo))
         self.stopping = threading.Event()  # programs in flight stop tuning at their next candidate
         self.outcomes = SampleOutcomes(
             cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop,
             observe=lambda result: self.budget.observe(result),
         )
         self.budget = TimeBudget(
-            cfg.search.max_seconds, self.outcomes.running, elapsed=time.perf_counter() - self.started, tuned=cfg.gfo.tunes_constants,
+            cfg.search.max_seconds, self.outcomes.running, elapsed=time.perf_counter() - self.started, tuned=tunes_constants(cfg.gfo),
         )
         self.startup_seconds = 0.0  # from `started` to the first batch (set then)
         self.generation_thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
@@ -244,7 +245,7 @@ class Search:
 
     def _prompt(self, retry: int = 0) -> Prompt:
         """A prompt from a new selection of the database; `retry`: the regeneration of an answer it is for."""
-        spec, tuned = self.spec, self.cfg.gfo.tunes_constants
+        spec, tuned = self.spec, tunes_constants(self.cfg.gfo)
         prompt = build_prompt(spec.description, self.database.select(), constants_tuned=tuned, allowed_imports=spec.allowed_imports)
         return dataclasses.replace(prompt, retry=retry)
 

@@ -13,7 +13,7 @@ from colmo.errors import ConfigError
 from colmo.evaluation import Evaluation
 from colmo.executor import EXECUTORS, LocalExecutor, make_executor
 from colmo.help import help_text
-from colmo.optimize.methods import METHODS, EvaluateOnce
+from colmo.optimize.methods import METHODS, EvaluateOnce, tunes_constants
 from colmo.optimize.tune import tune
 from colmo.registry import Registry
 from colmo.trackers import TRACKERS, NoTracker, make_tracker
@@ -70,8 +70,8 @@ def test_help_lists_the_registered_names():
 
 
 def test_the_option_picks_whether_constants_are_tuned():
-    assert not compose("search", "gfo=none").gfo.tunes_constants
-    assert compose("search", "gfo=de").gfo.tunes_constants
+    assert not tunes_constants(compose("search", "gfo=none").gfo)
+    assert tunes_constants(compose("search", "gfo=de").gfo)
 
 
 class CountingEvaluator:

@@ -119,12 +119,10 @@ class ReportConfig:
     tracking_uri: Optional[str] = option(None, "null: sqlite:///mlruns.db in the working directory")
 
     def __post_init__(self) -> None:
-        from colmo.report.selection import AXES
-
         self.experiment = _names(self.experiment, "experiment")
         require(bool(self.experiment), "experiment=NAME is required")
         self.axis = _names(self.axis, "axis")
-        require(bool(self.axis) and set(self.axis) <= set(AXES), f"axis must be one or more of {', '.join(AXES)}, got {','.join(self.axis)!r}")
+        require(bool(self.axis), "axis=NAME is required")  # which names: the report's (colmo.report.__main__.check_inputs)
 
 
 def _names(value: Any, key: str) -> tuple[str, ...]:

@@ -32,22 +32,6 @@ class GFOConfig:
         at_least(self, "gfo", budget=1, workers=1, racing_min_episodes=2, racing_margin=0)
         above(self, "gfo", relative_step=0, min_step=0)
 
-    @property
-    def tunes_constants(self) -> bool:
-        """Whether the method changes a program's constants, as it declares (`gfo=none`, which
-        evaluates each program as written, does not)."""
-        from colmo.optimize.methods import METHODS
-
-        return METHODS[self.method].tunes_constants
-
-    @property
-    def racing_on(self) -> bool:
-        if self.racing is not None:
-            return self.racing
-        from colmo.optimize.methods import METHODS
-
-        return METHODS[self.method].comparison_based
-
 
 @dataclass
 class BOConfig(GFOConfig):

@@ -64,6 +64,17 @@ class Method(abc.ABC):
 METHODS: Registry[type[Method]] = Registry("gfo.method")
 
 
+def tunes_constants(cfg: GFOConfig) -> bool:
+    """Whether `cfg`'s method changes a program's constants, as the method declares (`gfo=none`,
+    which evaluates each program as written, does not)."""
+    return METHODS[cfg.method].tunes_constants
+
+
+def racing_on(cfg: GFOConfig) -> bool:
+    """Whether `cfg`'s candidates race: `gfo.racing`, or by default whether the method is comparison-based."""
+    return cfg.racing if cfg.racing is not None else METHODS[cfg.method].comparison_based
+
+
 @METHODS.register("none")
 class EvaluateOnce(Method):
     """No tuning: each program is evaluated once, with its constants as written (the paper's

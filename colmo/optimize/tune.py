@@ -33,7 +33,7 @@ import numpy as np
 
 from colmo.errors import ConfigError
 from colmo.evaluation import FAST, REFEREE, Evaluation, Evaluator, Executor
-from colmo.optimize.methods import METHODS
+from colmo.optimize.methods import METHODS, racing_on, tunes_constants
 from colmo.program import DISPLAY_DIGITS, ParametricProgram, ProgramSize, instantiate, measure, round_significant
 from colmo.racing import Race
 
@@ -122,7 +122,7 @@ def tune(evaluate: CandidateEvaluator, x0: Sequence[float], cfg: "GFOConfig", se
                 break
             asked = [method.ask() for _ in range(min(cfg.workers, cfg.budget - evaluations))]
             candidates = [x0 + scale * z for _, z in asked]
-            race = Race(best.returns, cfg.racing_min_episodes, cfg.racing_margin) if cfg.racing_on else None
+            race = Race(best.returns, cfg.racing_min_episodes, cfg.racing_margin) if racing_on(cfg) else None
             for (token, _), params, evaluation in zip(asked, candidates, evaluate.fast(candidates, race)):
                 method.tell(token, _told(evaluation, race))
                 evaluations, steps, raced_out = evaluations + 1, steps + evaluation.steps, raced_out + evaluation.raced_out
@@ -171,7 +171,7 @@ def optimize_program(
 ) -> ProgramResult:
     """Tune `program`, and have the referee score the readable (4-digit) code that results."""
     start = time.perf_counter()
-    if not cfg.tunes_constants or not program.values:  # nothing to tune: the referee's score is the only one
+    if not tunes_constants(cfg) or not program.values:  # nothing to tune: the referee's score is the only one
         final = evaluate.referee(program.values)
         code = instantiate(program.skeleton, program.values)
         return ProgramResult(

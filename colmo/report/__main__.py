@@ -13,7 +13,7 @@ from pathlib import Path
 from colmo.cli import hydra_app
 from colmo.config import ReportConfig
 from colmo.errors import ConfigError
-from colmo.report import default_out, write_report
+from colmo.report import AXES, default_out, write_report
 from colmo.track import connect, default_tracking_uri, sqlite_path
 
 
@@ -22,7 +22,9 @@ def _tracking_uri(cfg: ReportConfig) -> str:
 
 
 def check_inputs(cfg: ReportConfig) -> None:
-    """The tracking database exists (a report never creates one)."""
+    """The axes are the report's, and the tracking database exists (a report never creates one)."""
+    if not set(cfg.axis) <= set(AXES):
+        raise ConfigError(f"axis must be one or more of {', '.join(AXES)}, got {','.join(cfg.axis)!r}")
     database = sqlite_path(_tracking_uri(cfg))
     if database is not None and not database.is_file():
         raise ConfigError(f"no tracking database at {database}: run a search first, or pass tracking_uri=")

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Callable, Optional, Sequence
 from colmo.errors import RunError
 from colmo.evaluation import REFEREE, Evaluation, Evaluator, Executor
 from colmo.intake import Unusable, read_program
+from colmo.optimize.methods import tunes_constants
 from colmo.optimize.tune import CandidateEvaluator, optimize_program
 from colmo.program import ParametricProgram
 from colmo.sandbox.check import ForbiddenProgram
@@ -119,7 +120,7 @@ def simplify_program(
     Raises RunError if the program fails on the training episodes (nothing to keep)."""
     train = RefereeScores(executor, train_evaluator)
     heldout = RefereeScores(executor, heldout_evaluator)
-    retune = gfo_retune(executor, train_evaluator, gfo_cfg, seed, stop) if gfo_cfg.tunes_constants else None
+    retune = gfo_retune(executor, train_evaluator, gfo_cfg, seed, stop) if tunes_constants(gfo_cfg) else None
     batch_size = batch_size or BATCH_PER_WORKER * executor.n_workers
     try:
         return simplify(code, Scoring(train, heldout), retune, tolerance, max_rounds, batch_size, stop=stop)
