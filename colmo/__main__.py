@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import sys
 from pathlib import Path
@@ -53,7 +54,10 @@ def main(cfg: SearchConfig) -> Optional[float]:
     Returns the best training score (None if the run has no result of its own): the objective a
     Hydra sweeper such as Optuna's maximizes (colmo/conf/hydra/sweeper/optuna.yaml). A run with
     no result ends with a line saying why and exit code 1; in a `-m` sweep the other jobs go on
-    and the sweep's end says which failed (`colmo.sweep_comparison`)."""
+    and the sweep's end says which failed (`colmo.sweep_comparison`).
+
+    A sweep run again into the same directory (`hydra.sweep.dir=DIR`) keeps each job that has a
+    result there and resumes every other one from its store (`resume=`, with the same checks)."""
     from hydra.types import RunMode
 
     from colmo.budget import job_start
@@ -61,9 +65,19 @@ def main(cfg: SearchConfig) -> Optional[float]:
     sweep_job = HydraConfig.get().mode == RunMode.MULTIRUN
     started = job_start(sweep_job)  # before the heavy imports, which are the job's start-up
     from colmo.progress import progress
+    from colmo.record import summary_failure
     from colmo.search import Search
+    from colmo.store import holds_run, open_for_resume, read_summary, run_settings
 
     run_dir = Path(HydraConfig.get().runtime.output_dir)
+    if sweep_job and not cfg.resume and holds_run(run_dir):  # the sweep runs again into its directory
+        earlier = read_summary(run_dir)
+        if summary_failure(earlier) is None:
+            print(f"this job finished earlier in {run_dir}: best score {earlier['best_score']:.2f}; kept")
+            return earlier["best_score"]
+        cfg = dataclasses.replace(cfg, resume=str(run_dir))
+        open_for_resume(run_dir, run_settings(cfg))  # the same settings, or one line and exit 2
+        logging.getLogger("colmo").info("this job resumes its earlier run in %s", run_dir)
     search = Search(cfg, run_dir, make_tracker(cfg.tracker).search_observers(cfg, run_dir), started=started)
     with progress(search):
         summary = search.run()
@@ -76,7 +90,11 @@ def main(cfg: SearchConfig) -> Optional[float]:
         f"{summary.failures} failures, {summary.unusable_outputs} unusable) in {summary.seconds:.0f} s; stopped: {summary.stop_reason}"
     )
     print(f"run directory: {summary.run_dir}")
-    if summary.resumable:
+    if summary.resumable and sweep_job:
+        hydra = HydraConfig.get()
+        sweep_dir = (Path(hydra.runtime.cwd) / hydra.sweep.dir).resolve()
+        print(f"resume the sweep with the same command and hydra.sweep.dir={sweep_dir}: finished jobs are kept, the others resumed", file=sys.stderr)
+    elif summary.resumable:
         overrides = " ".join(o for o in HydraConfig.get().overrides.task if not o.startswith("resume="))
         print(f"resume with: colmo {overrides} resume={summary.run_dir}".replace("  ", " "), file=sys.stderr)
     if summary.failure is None:

@@ -17,7 +17,7 @@ import collections
 import math
 import time
 from dataclasses import asdict, astuple, dataclass, field, replace
-from typing import TYPE_CHECKING, Any, Optional, Protocol
+from typing import TYPE_CHECKING, Any, Mapping, Optional, Protocol
 
 from colmo.generate.base import Generation
 
@@ -210,6 +210,13 @@ def shortfall(stop_reason: str, samples: int, programs_evaluated: int) -> Option
     if not samples and stop_reason == "max_seconds":
         return "no sample searched: search.max_seconds left no time after the start-up"
     return f"no program evaluated in {samples} sample{'s' * (samples != 1)}"
+
+
+def summary_failure(summary: Optional[Mapping[str, Any]]) -> Optional[str]:
+    """`shortfall` of a run from its `summary.json` (None if it wrote none: it failed or was killed)."""
+    if summary is None:
+        return "no summary: the run failed or was stopped"
+    return shortfall(summary.get("stop_reason", ""), summary.get("samples", 0), summary.get("programs_evaluated", 0))
 
 
 @dataclass(frozen=True)

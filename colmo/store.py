@@ -248,6 +248,22 @@ def open_for_resume(run_dir: Path, settings: Mapping[str, Any]) -> None:
     check_settings(run_dir, recorded, settings)
 
 
+def holds_run(run_dir: Path) -> bool:
+    """Whether `run_dir` holds an earlier run's store, its settings recorded, read without
+    changing anything (a run killed before it recorded them left nothing to resume)."""
+    path = run_dir / STORE_FILE
+    if not path.is_file() or not path.stat().st_size:
+        return False
+    try:
+        connection = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+        try:
+            return bool(_run_settings_in(connection))
+        finally:
+            connection.close()
+    except sqlite3.DatabaseError:
+        return False
+
+
 def _existing_store(run_dir: Path) -> Path:
     """The store file of the earlier run in `run_dir`, or `ConfigError` saying why there is none."""
     path = run_dir / STORE_FILE
@@ -276,6 +292,14 @@ def _elapsed_in(connection: sqlite3.Connection) -> Optional[Elapsed]:
 
 def _run_settings_in(connection: sqlite3.Connection) -> dict[str, Any]:
     return {name: json.loads(value) for name, value in connection.execute("SELECT name, value FROM run WHERE name != ?", (_ELAPSED,))}
+
+
+def read_summary(run_dir: Path) -> Optional[dict[str, Any]]:
+    """The `summary.json` a run wrote in `run_dir`; None if it wrote none (or one cut off while written)."""
+    try:
+        return json.loads((run_dir / SUMMARY_FILE).read_text())
+    except (OSError, ValueError):
+        return None
 
 
 def write_outputs(summary: Summary, run_dir: Path) -> None:

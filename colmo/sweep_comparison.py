@@ -28,7 +28,6 @@ by its id (`sweep_id`).
 from __future__ import annotations
 
 import hashlib
-import json
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,8 +38,8 @@ from omegaconf import DictConfig, OmegaConf
 
 from colmo.comparison import difference, mean_std
 from colmo.errors import EXIT_RUNTIME
-from colmo.record import shortfall
-from colmo.store import SUMMARY_FILE
+from colmo.record import summary_failure
+from colmo.store import read_summary
 
 
 def sweep_id(sweep_dir: Path) -> str:
@@ -62,9 +61,7 @@ class JobOutcome:
     @property
     def failure(self) -> Optional[str]:
         """Why this job has no result to compare, or None."""
-        if self.summary is None:
-            return "no summary: the job failed or was stopped"
-        return shortfall(self.summary.get("stop_reason", ""), self.summary.get("samples", 0), self.summary.get("programs_evaluated", 0))
+        return summary_failure(self.summary)
 
 
 def read_jobs(sweep_dir: Path) -> list[JobOutcome]:
@@ -79,8 +76,7 @@ def read_jobs(sweep_dir: Path) -> list[JobOutcome]:
             overrides = tuple(OmegaConf.load(hydra_dir / "overrides.yaml"))
         except (OSError, ValueError, AttributeError):  # not a job of this sweep, or one cut off while starting
             continue
-        summary_path = job_dir / SUMMARY_FILE
-        summary = json.loads(summary_path.read_text()) if summary_path.is_file() else None
+        summary = read_summary(job_dir)
         tracker = config.get("tracker", {})
         tracking = OmegaConf.to_container(tracker) if tracker.get("name") == "mlflow" else None
         jobs.append(JobOutcome(int(hydra.job.num), overrides, summary, tracking, str(config.task.name)))

@@ -6,6 +6,7 @@ through a colmo app, every file and directory a run writes is."""
 from __future__ import annotations
 
 import os
+import sqlite3
 import stat
 import subprocess
 import sys
@@ -85,3 +86,17 @@ def test_every_file_a_run_writes_is_private_even_in_a_directory_the_user_made(tm
     assert {"colmo.log", "result.json", "tuned_policy.py", ".hydra"} <= written.keys()
     assert written == {name: 0o700 if (run_dir / name).is_dir() else 0o600 for name in written}
     assert mode(run_dir) == 0o777  # the user's own directory keeps the mode the user gave it
+
+
+def test_a_store_killed_before_it_recorded_its_run_holds_nothing_to_resume(tmp_path):
+    from colmo.store import STORE_FILE, holds_run, open_run
+
+    assert not holds_run(tmp_path)  # no store
+    (tmp_path / STORE_FILE).touch()
+    assert not holds_run(tmp_path)  # created, nothing written
+    sqlite3.connect(tmp_path / STORE_FILE).close()
+    assert not holds_run(tmp_path)
+    store, lock = open_run(tmp_path, {"seed": 0}, resume=False)  # a fresh run over it
+    store.close()
+    lock.release()
+    assert holds_run(tmp_path)

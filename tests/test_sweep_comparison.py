@@ -78,7 +78,8 @@ def test_a_sweep_with_a_job_that_searched_nothing_runs_the_others_and_exits_1(tm
     result = run_colmo("colmo", "-m", "search.max_seconds=1,0", *TINY, "tracker=none", "hydra.sweep.dir=sweep", cwd=tmp_path, timeout=600)
     assert result.returncode == 1, result.stderr
     assert result.stderr.strip().splitlines()[-1] == "colmo: error: 1 of 2 jobs failed (job 0): no result to compare"
-    rows = result.stdout.splitlines()[-2:]
+    lines = result.stdout.splitlines()
+    rows = lines[lines.index("sweep sweep: 2 jobs") + 2:][:2]
     assert " ".join(rows[0].split()).startswith("0 search.max_seconds=1 failed: no sample searched")
     finished = json.loads(next((tmp_path / "sweep").glob("1_*/summary.json")).read_text())
     assert finished["samples"] == 2 and finished["programs_evaluated"] > 0
