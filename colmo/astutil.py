@@ -1,16 +1,29 @@
-"""Small AST helpers shared by every module that reads or rewrites program code: docstrings,
-the names a statement or a node binds, renaming identifiers, replacing nodes, and counting nodes.
+"""Small AST helpers shared by every module that reads or rewrites program code: parsing,
+docstrings, the names a statement or a node binds, renaming identifiers, replacing nodes, and
+counting nodes.
 
-They work on `ast` trees only and never run code.
+They work on `ast` trees only and never run code. Every parse in colmo goes through `parse`:
+CPython (3.11, 3.12) keeps the recursion depth of its AST constructor in state shared by all
+threads, so two threads parsing at once (the generation thread and the program threads of a
+search) can fail one of them with `SystemError: AST constructor recursion depth mismatch`,
+which ended a whole sweep; `parse` holds one lock while it builds a tree.
 """
 
 from __future__ import annotations
 
 import ast
 import math
+import threading
 from typing import Collection, Iterator, Mapping, Sequence
 
 _DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
+_PARSING = threading.Lock()
+
+
+def parse(source: str, filename: str = "<unknown>", mode: str = "exec") -> ast.AST:
+    """`ast.parse`, one thread at a time (see the module docstring)."""
+    with _PARSING:
+        return ast.parse(source, filename=filename, mode=mode)
 
 
 def is_docstring(statement: ast.AST) -> bool:

@@ -44,6 +44,7 @@ import math
 import re
 from typing import Iterator
 
+from colmo import astutil
 from colmo.astutil import bound_names, rename, unbound_names
 
 _FENCE = re.compile(r"\s*```")
@@ -93,7 +94,7 @@ def _extract(text: str, function_name: str, prefix: str, shown: str) -> str:
             statements = [s for module in _code_regions(text, budget) for s in module.body]
         versions = _versions(statements, version)
         if shown:  # before the answer's statements: a definition of the answer's replaces a shown one
-            statements = ast.parse(shown).body + statements
+            statements = astutil.parse(shown).body + statements
     if not versions:
         signature = re.search(rf"^[ \t]*def\s+{version.pattern}\s*\(", text, re.MULTILINE)
         if signature:
@@ -114,7 +115,7 @@ def first_syntax_error(source: str) -> tuple[int, str] | None:
     """The line and message of the first syntax error in `source`, if it has one (None too for
     what the parser refuses for other reasons: null bytes, absurd nesting)."""
     try:
-        ast.parse(source)
+        astutil.parse(source)
     except SyntaxError as error:
         return error.lineno or 1, error.msg
     except (ValueError, RecursionError, MemoryError):
@@ -210,7 +211,7 @@ class _ParseBudget:
         self.left -= len(source) + 1
         if self.left < 0:
             raise ExtractionError("the answer is too irregular to read (parse budget spent)")
-        return ast.parse(source)
+        return astutil.parse(source)
 
 
 def _statement_starts(lines: list[str], begin: int, indent: str) -> Iterator[int]:
@@ -348,7 +349,7 @@ def _add_missing_imports(module: ast.Module) -> None:
     bound = {name for statement in module.body for name in bound_names(statement)}
     bound |= {name for n in ast.walk(module) if isinstance(n, (ast.Import, ast.ImportFrom)) for name in bound_names(n)}
     used = {n.id for n in ast.walk(module) if isinstance(n, ast.Name)}
-    missing = [ast.parse(line).body[0] for name, line in _MISSING_IMPORTS.items() if name in used - bound]
+    missing = [astutil.parse(line).body[0] for name, line in _MISSING_IMPORTS.items() if name in used - bound]
     # Names bound anywhere (a local `pi = 3.14`, an argument) are not the math module's.
     from_math = sorted(set(unbound_names(module, ())) & _MATH_NAMES)
     if from_math:

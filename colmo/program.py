@@ -45,6 +45,7 @@ import hashlib
 from dataclasses import dataclass
 from typing import Sequence
 
+from colmo import astutil
 from colmo.astutil import (
     bound_names,
     identifiers,
@@ -178,7 +179,7 @@ def structure_key(skeleton: str) -> str:
 
 def _parse(code: str) -> ast.Module:
     try:
-        return ast.parse(code)
+        return astutil.parse(code)
     except SyntaxError as error:
         raise ProgramError(f"syntax error at line {error.lineno}: {error.msg}") from None
     except ValueError as error:  # e.g. null bytes in the source

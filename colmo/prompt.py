@@ -31,6 +31,7 @@ import re
 from dataclasses import dataclass
 from typing import Sequence
 
+from colmo import astutil
 from colmo.astutil import bound_names, is_docstring, rename
 from colmo.database import Selection
 from colmo.specs import DEFAULT_IMPORTS
@@ -102,7 +103,7 @@ def _blind_versions(codes: Sequence[str], function_name: str, new: str) -> str:
     another constant far more often than not (docs/llm-duplicates.md)."""
     blind = []
     for version, code in enumerate(codes):
-        policy = next(s for s in ast.parse(code).body if isinstance(s, ast.FunctionDef) and s.name == function_name)
+        policy = next(s for s in astutil.parse(code).body if isinstance(s, ast.FunctionDef) and s.name == function_name)
         arguments = {a.arg for a in policy.args.posonlyargs + policy.args.args + policy.args.kwonlyargs}
         if not any(isinstance(n, ast.Name) and n.id in arguments for n in ast.walk(policy) if not isinstance(n, ast.arg)):
             blind.append(f"{function_name}_v{version}")
@@ -158,7 +159,7 @@ def _render(codes: list[str], function_name: str) -> tuple[list[str], list[str],
     shown: dict[str, str] = {}  # name bound by a shown definition -> that definition's text
     versions = []
     for version, code in enumerate(codes):
-        statements = ast.parse(code).body
+        statements = astutil.parse(code).body
         policies = [s for s in statements if isinstance(s, ast.FunctionDef) and s.name == function_name]
         if not policies:
             raise ValueError(f"program {version} of the prompt defines no {function_name}()")

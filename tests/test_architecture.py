@@ -119,3 +119,23 @@ def test_the_config_schemas_import_no_component() -> None:
     allowed = ("colmo.config", "colmo.errors", "colmo.registry")
     reached = {name: sorted(m for m in targets if not m.startswith(allowed)) for name, targets in import_graph().items() if name.startswith("colmo.config")}
     assert {name: targets for name, targets in reached.items() if targets} == {}
+
+
+def test_every_parse_goes_through_the_one_lock() -> None:
+    """CPython's AST constructor is not safe in two threads at once: colmo parses only through
+    `colmo.astutil.parse` (see its docstring)."""
+    direct = [
+        f"{path.relative_to(ROOT)}:{node.lineno}"
+        for path in (ROOT / "colmo").rglob("*.py") if path.name != "astutil.py"
+        for node in ast.walk(ast.parse(path.read_text()))
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "parse"
+        and isinstance(node.func.value, ast.Name) and node.func.value.id == "ast"
+    ]
+    assert direct == []
+
+
+def test_parse_is_ast_parse() -> None:
+    from colmo.astutil import parse
+
+    assert ast.dump(parse("x = 1\n")) == ast.dump(ast.parse("x = 1\n"))
+    assert isinstance(parse("1 + 2", mode="eval"), ast.Expression)

@@ -41,6 +41,7 @@ from typing import Optional
 
 import numpy as np
 
+from colmo import astutil
 from colmo.config import MutateConfig
 from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, logger
 from colmo.generate.operators import CROSSOVERS, MUTATIONS, Pieces, policy_function
@@ -56,10 +57,10 @@ class _Parent:
     def __init__(self, code: str):
         self.code = code
         self.key = parametrize(code).key  # ProgramError unless it parses and defines `policy`
-        self.tree = ast.parse(code)
+        self.tree = astutil.parse(code)
         self.fn = policy_function(self.tree)
         if not any(a.name == "numpy" for n in self.tree.body if isinstance(n, ast.Import) for a in n.names):
-            self.tree.body.insert(0, ast.parse("import numpy as np").body[0])  # for the new terms' np.*
+            self.tree.body.insert(0, astutil.parse("import numpy as np").body[0])  # for the new terms' np.*
 
 
 @GENERATORS.register("mutate")

@@ -15,6 +15,7 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
+from colmo import astutil
 from colmo.astutil import OPAQUE_FIELDS, is_docstring, replace_nodes
 
 _FUNCTIONS = ("sin", "cos", "tanh", "sign", "abs")
@@ -151,7 +152,7 @@ class Pieces:
 
 
 def _expression(source: str) -> ast.expr:
-    return ast.parse(source, mode="eval").body
+    return astutil.parse(source, mode="eval").body
 
 
 # Each mutation edits the policy function in place and says whether it found something to edit.

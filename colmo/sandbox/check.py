@@ -38,6 +38,7 @@ from typing import Collection, Sequence
 
 import numpy as np
 
+from colmo import astutil
 from colmo.astutil import IDENTIFIER_FIELDS, bindings
 from colmo.errors import failure_reason
 
@@ -191,7 +192,7 @@ def check_tree(tree: ast.Module, allowed_imports: Sequence[str]) -> None:
 def parse_program(code: str) -> ast.Module:
     """The program's AST; `ForbiddenProgram` with a `syntax error: ...` reason if it has none."""
     try:
-        return ast.parse(code)
+        return astutil.parse(code)
     except SyntaxError as error:
         line = f" (line {error.lineno})" if error.lineno else ""
         raise ForbiddenProgram(failure_reason(f"syntax error: {error.msg}{line}")) from None

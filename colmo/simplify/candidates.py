@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Optional
 
+from colmo import astutil
 from colmo.astutil import OPAQUE_FIELDS, is_number_literal, node_count, number_literal, strip_docstrings
 from colmo.simplify.deadcode import FUNCTIONS, own_statements, remove_dead_code
 
@@ -177,21 +178,21 @@ def _negated(node: ast.expr) -> ast.expr:
 def deletion_candidates(code: str, function_name: str = "policy") -> list[Candidate]:
     """Every one-step simplification of `code` (see the module docstring), each cleaned by
     `remove_dead_code`, strictly smaller than `code`, without duplicates, in source-walk order."""
-    tree = ast.parse(code)
+    tree = astutil.parse(code)
     strip_docstrings(tree)
     nodes = node_count(tree)
-    seen = {ast.dump(ast.parse(remove_dead_code(code, function_name)))}
+    seen = {ast.dump(astutil.parse(remove_dead_code(code, function_name)))}
     candidates: list[Candidate] = []
     parents = _parents(tree)
     walk_order = {id(node): i for i, node in enumerate(ast.walk(tree))}
     source = ast.unparse(tree)
     # Each deletion edits a fresh copy: parsing the source again is much faster than deepcopy,
     # and gives the same tree, walked in the same order, whenever unparsing loses nothing.
-    reparses = ast.dump(ast.parse(source)) == ast.dump(tree)
+    reparses = ast.dump(astutil.parse(source)) == ast.dump(tree)
     for node, description, edit in _edits(tree, function_name, parents):
         parent, name, index = parents[id(node)]
         if reparses:
-            copied = ast.parse(source)
+            copied = astutil.parse(source)
             walked = list(ast.walk(copied))
             edit(walked[walk_order[id(node)]], walked[walk_order[id(parent)]], name, index)
         else:
@@ -200,7 +201,7 @@ def deletion_candidates(code: str, function_name: str = "policy") -> list[Candid
             edit(copies[id(node)], copies[id(parent)], name, index)
         try:
             new_code = remove_dead_code(ast.unparse(ast.fix_missing_locations(copied)), function_name)
-            new_tree = ast.parse(new_code)
+            new_tree = astutil.parse(new_code)
         except (SyntaxError, ValueError, RecursionError):
             continue
         dump, new_nodes = ast.dump(new_tree), node_count(new_tree)

@@ -20,6 +20,7 @@ import copy
 from dataclasses import dataclass
 from typing import Iterator, Optional
 
+from colmo import astutil
 from colmo.astutil import bindings, strip_docstrings
 from colmo.simplify.fold import Fold
 from colmo.simplify.scope import Scope
@@ -343,7 +344,7 @@ def _module_liveness(tree: ast.Module, scope: Scope, function_name: str) -> None
 def remove_dead_code(code: str, function_name: str = "policy") -> str:
     """`code` without dead code and with literal arithmetic folded, as `ast.unparse` writes it
     (see the module docstring for what goes); the program computes the same actions."""
-    tree = ast.parse(code)
+    tree = astutil.parse(code)
     strip_docstrings(tree)
     before = ast.dump(tree)
     for _ in range(100):  # each pass only removes; the bound is a guard

@@ -43,6 +43,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Sequence
 
+from colmo import astutil
 from colmo.program import ProgramSize, measure, parametrize
 from colmo.record import finite_or_none
 from colmo.simplify.candidates import Candidate, deletion_candidates
@@ -187,7 +188,7 @@ def _same_scores(a: Scores, b: Scores) -> bool:
 
 
 def _same_code(a: str, b: str) -> bool:
-    return ast.dump(ast.parse(a)) == ast.dump(ast.parse(b))
+    return ast.dump(astutil.parse(a)) == ast.dump(astutil.parse(b))
 
 
 def simplify(

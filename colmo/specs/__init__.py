@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from colmo import astutil
 from colmo.environments.base import Environment
 from colmo.environments.perturb import perturbable
 
@@ -65,7 +66,7 @@ def load_spec(name_or_path: str) -> Spec:
     path = resolve_spec_path(name_or_path)
     source = path.read_text()
     try:
-        tree = ast.parse(source, filename=str(path))
+        tree = astutil.parse(source, filename=str(path))
     except SyntaxError as error:
         raise SpecError(f"{path}:{error.lineno}: syntax error in spec file: {error.msg}") from None
     description = ast.get_docstring(tree)
