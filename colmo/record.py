@@ -144,6 +144,7 @@ class Totals:
     generator_busy: float  # fractions of the wall time
     evaluator_busy: float
     seconds: float
+    worker_seconds: float  # the evaluation workers' busy seconds, summed over workers: the compute evaluations took
 
 
 @dataclass(frozen=True)
@@ -181,8 +182,10 @@ class Summary(Totals):
     simplified: dict = field(default_factory=dict)  # the best policy simplified: scores, sizes, code
     robustness: dict = field(default_factory=dict)  # the best policy under model mismatch: headline scores, files in run_dir
     # This process's start-up: from the job's start to the search's first batch (imports, the
-    # workers, the starter's calibration and tuning), seconds of `search.max_seconds` not searched.
+    # workers, the starter's calibration and tuning), seconds of `search.max_seconds` not searched;
+    # then the search's own seconds, from its first batch to its stop (the finish follows).
     startup_seconds: float = 0.0
+    search_seconds: float = 0.0
 
     @property
     def failure(self) -> Optional[str]:
@@ -271,6 +274,7 @@ class Counters:
             tokens_per_second=_ratio(self.completion_tokens, self.generation_seconds),
             evaluations_per_second=_ratio(self.evaluations, elapsed.seconds), generator_busy=_ratio(elapsed.generator_seconds, elapsed.seconds),
             evaluator_busy=_ratio(elapsed.evaluator_seconds, elapsed.seconds * workers), seconds=elapsed.seconds,
+            worker_seconds=elapsed.evaluator_seconds,
         )
 
 

@@ -123,7 +123,7 @@ class Search:
         self.budget = TimeBudget(
             cfg.search.max_seconds, self.outcomes.running, elapsed=time.perf_counter() - self.started, tuned=tunes_constants(cfg.gfo),
         )
-        self.startup_seconds = 0.0  # from `started` to the first batch (set then)
+        self.startup_seconds = self.search_seconds = 0.0  # from `started` to the first batch; from there to the search's stop
         self.generation_thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
         self.evaluator: Optional[Evaluator] = None
         self.database: Optional[ProgramDatabase] = None
@@ -136,6 +136,7 @@ class Search:
 
     def _run(self) -> Summary:
         try:
+            searching_since: Optional[float] = None
             try:
                 if not self._wants_probe():  # a generator that cannot start ends the run before any work
                     self._start_generator()
@@ -145,7 +146,8 @@ class Search:
                 self.best_so_far = [(0, self.database.best.score)]
                 to_evaluate = self._replay()
                 self._start_generator()
-                self.startup_seconds = time.perf_counter() - self.started
+                searching_since = time.perf_counter()
+                self.startup_seconds = searching_since - self.started
                 self._loop(to_evaluate)
             except (KeyboardInterrupt, ExecutorClosed):  # a signal before the handlers were in place, or a second one
                 self.stop_reason = self.stop_reason or "interrupted"
@@ -154,6 +156,10 @@ class Search:
                 log.error("%s", self.stop_reason)
             finally:
                 self._stop_programs()
+                if searching_since is None:  # a run that never searched spent its time starting
+                    self.startup_seconds = time.perf_counter() - self.started
+                else:
+                    self.search_seconds = time.perf_counter() - searching_since
             best = BestPrograms()
             if self.database is not None and self.stop_reason in FINISHED:  # a stopped run finishes when resumed
                 best = finish(
@@ -163,7 +169,7 @@ class Search:
             best_program = self.database.best if self.database else None
             summary = best.summary(
                 self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals(),
-                self.startup_seconds or time.perf_counter() - self.started,  # a run that never searched spent it all starting
+                self.startup_seconds, self.search_seconds,
             )
             write_outputs(summary, self.run_dir)
             for observer in self.observers:

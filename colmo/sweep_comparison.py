@@ -5,8 +5,8 @@ of a sweep has ended (`on_multirun_end`) it reads what each job wrote in the swe
 `summary.json` and the overrides Hydra saved, whatever launcher ran it, and prints::
 
     sweep multirun/2026-12-02_18-20-00: 4 jobs
-      job  variant          best  held-out  samples  seconds
-        0  gfo=oneplusone  186.50   179.00       12     88.1
+      job  variant          best  held-out  samples  seconds  searched
+        0  gfo=oneplusone  186.50   179.00       12     88.1      55.3
         1  gfo=none        failed: no sample searched: search.max_seconds left no time after the start-up
         ...
       best score by setting, mean ± std over seeds (each seed), difference to the first:
@@ -15,9 +15,10 @@ of a sweep has ended (`on_multirun_end`) it reads what each job wrote in the swe
     report: colmo-report experiment=pendulum sweep=3f2a...
 
 `variant` is what sets a job apart: its overrides less those every job shares; `seconds`, its
-wall time. A job with no result to compare is a line saying why and never a score: it wrote no
-summary (it failed or was killed), stopped before its limits, or evaluated no program of its
-own (`colmo.record.shortfall`); the sweep then ends with one line naming them and exit code 1.
+wall time, and `searched`, the seconds from its first batch to the search's stop. A job with
+no result to compare is a line saying why and never a score: it wrote no summary (it failed or
+was killed), stopped before its limits, or evaluated no program of its own
+(`colmo.record.shortfall`); the sweep then ends with one line naming them and exit code 1.
 Where the sweep compares settings, not only seeds, each setting's scores follow, and its
 difference to the first setting with a bootstrap interval (`colmo.comparison`): "no
 significant difference" where the interval holds 0.
@@ -93,14 +94,14 @@ def comparison_lines(sweep_dir: Path, jobs: list[JobOutcome], shown_dir: Optiona
     variants = [" ".join(o for o in job.overrides if o not in shared) or "(all alike)" for job in jobs]
     width = max([len("variant"), *map(len, variants)])
     lines = [f"sweep {shown_dir or sweep_dir}: {len(jobs)} job{'s' * (len(jobs) != 1)}"]
-    lines.append(f"  {'job':>3}  {'variant':<{width}}  {'best':>8}  {'held-out':>8}  {'samples':>7}  {'seconds':>7}")
+    lines.append(f"  {'job':>3}  {'variant':<{width}}  {'best':>8}  {'held-out':>8}  {'samples':>7}  {'seconds':>7}  {'searched':>8}")
     for job, variant in zip(jobs, variants):
         if job.failure is not None:
             lines.append(f"  {job.number:>3}  {variant:<{width}}  failed: {job.failure}")
             continue
         best, heldout = _score(job.summary.get("best_score")), _score(job.summary.get("best_heldout_score"))
-        samples, seconds = job.summary.get("samples", 0), job.summary.get("seconds", 0.0)
-        lines.append(f"  {job.number:>3}  {variant:<{width}}  {best:>8}  {heldout:>8}  {samples:>7}  {seconds:>7.1f}")
+        samples, seconds, searched = (job.summary.get(key, 0) for key in ("samples", "seconds", "search_seconds"))
+        lines.append(f"  {job.number:>3}  {variant:<{width}}  {best:>8}  {heldout:>8}  {samples:>7}  {seconds:>7.1f}  {searched:>8.1f}")
     lines += variant_lines(jobs, variants)
     tracked = [job for job in jobs if job.tracking is not None]
     if tracked:

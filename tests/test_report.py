@@ -43,7 +43,8 @@ def log_run(client, experiment_id, index: int, run: Logged, *overrides: str, sta
     metrics = []
     for batch, best in enumerate(run.best):
         step = 4 * (batch + 1)
-        values = {"best_score": best, "best_score_island_0": best, "best_score_island_1": best / 2, "evaluations": 10.0 * step, "samples": step}
+        values = {"best_score": best, "best_score_island_0": best, "best_score_island_1": best / 2, "evaluations": 10.0 * step, "samples": step,
+                  "worker_seconds": 3.0 * step}
         if seconds:
             values["seconds"] = 2.0 * step
         metrics += [Metric(key, value, START, step) for key, value in values.items()]
@@ -120,7 +121,7 @@ def test_variants_are_compared_by_the_difference_of_means_with_its_interval_and_
     best = difference([200.0, 100.0], [420.0, 380.0])
     assert best.significant and tuned[4] == best.text() and tuned[4].startswith("+250.0, 95% interval [")
     assert tuned[6] == "+265.0 (no interval: fewer than 2 seeds a side)"  # held-out: one seed of GFO has one
-    assert tuned[7] == "16 ± 0" and tuned[9] == "8 ± 0" and tuned[10] == "80 ± 0"  # wall s (the logged seconds), model calls, evaluations
+    assert tuned[7] == "16 ± 0" and tuned[8] == "24 ± 0" and tuned[9] == "8 ± 0" and tuned[10] == "80 ± 0"  # wall and worker s (as logged), model calls, evaluations
 
 
 def test_a_difference_whose_interval_holds_0_is_said_to_be_none():
@@ -278,7 +279,9 @@ def test_the_caption_says_whether_budgets_were_equal_on_the_axis(store):
 
     _, client = store
     tasks = group(read_runs(client, ["pendulum"]).curves)
-    assert budget_note(tasks, "samples").startswith("Equal budgets on this axis: every run ends at 8 ")
+    assert budget_note(tasks, "samples") == "Equal budgets on this axis: every run ends at 8 model calls (programs sampled)."
+    tasks["pendulum"][0].runs[0].x[-1] = 8.5
+    assert budget_note(tasks, "samples").startswith("Equal budgets on this axis (within 10%): the runs end between 8 and 8.5 ")
     tasks["pendulum"][0].runs[0].x[-1] = 16.0
     assert budget_note(tasks, "samples").startswith("Unequal budgets on this axis: the runs end between 8 and 16 ")
 

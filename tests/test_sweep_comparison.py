@@ -23,12 +23,12 @@ def test_a_sweep_ends_with_one_line_per_job_and_the_command_of_its_report(tmp_pa
     lines = result.stdout.splitlines()
     start = lines.index("sweep sweep: 2 jobs")
     heading, *rows = lines[start + 1: start + 4]
-    assert heading.split() == ["job", "variant", "best", "held-out", "samples", "seconds"]
+    assert heading.split() == ["job", "variant", "best", "held-out", "samples", "seconds", "searched"]
     for number, row in enumerate(rows):
         summary = json.loads(next((tmp_path / "sweep").glob(f"{number}_*/summary.json")).read_text())
         assert row.split() == [
             str(number), f"seed={number}", f"{summary['best_score']:.2f}", f"{summary['best_heldout_score']:.2f}", str(summary["samples"]),
-            f"{summary['seconds']:.1f}",
+            f"{summary['seconds']:.1f}", f"{summary['search_seconds']:.1f}",
         ]
     report = lines[start + 4]
     assert report.startswith("report: colmo-report experiment=pendulum sweep=")
@@ -48,7 +48,7 @@ def test_a_sweep_ends_with_one_line_per_job_and_the_command_of_its_report(tmp_pa
 
 def summary(**fields) -> dict:
     return {"best_score": 180.0, "best_heldout_score": None, "samples": 4, "programs_evaluated": 3, "stop_reason": "max_samples",
-            "seconds": 12.25, **fields}
+            "seconds": 12.25, "search_seconds": 8.0, **fields}
 
 
 def test_a_job_without_a_result_is_a_line_saying_why_never_a_score():
@@ -61,7 +61,7 @@ def test_a_job_without_a_result_is_a_line_saying_why_never_a_score():
     ]
     lines = comparison_lines(Path("/runs/sweep"), jobs)
     assert lines[0] == "sweep /runs/sweep: 5 jobs"
-    assert lines[2].split() == ["0", "seed=0", "180.00", "-", "4", "12.2"]
+    assert lines[2].split() == ["0", "seed=0", "180.00", "-", "4", "12.2", "8.0"]
     assert lines[3].split()[:4] == ["1", "seed=1", "failed:", "no"]
     words = [" ".join(line.split()) for line in lines]
     assert words[4] == "2 seed=2 failed: no sample searched: search.max_seconds left no time after the start-up"

@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 from colmo.report.selection import AXES, Variant
 from colmo.report.tables import dims
 
+EQUAL_WITHIN = 1.1  # budgets whose ends differ by at most 10% are equal for the caption
 COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:cyan", "tab:olive", "tab:pink", "0.3")
 
 
@@ -49,10 +50,12 @@ def budget_note(tasks: dict[str, list[Variant]], axis: str) -> str:
     curves compare at equal budgets; else the range of their ends, and where to compare."""
     ends = [run.x[-1] for variants in tasks.values() for variant in variants for run in variant.runs]
     unit = AXES[axis][1]
-    if max(ends) <= 1.02 * min(ends):
-        return f"Equal budgets on this axis: every run ends at {min(ends):g} ({unit})."
+    if min(ends) == max(ends):
+        return f"Equal budgets on this axis: every run ends at {min(ends):g} {unit}."
+    if max(ends) <= EQUAL_WITHIN * min(ends):  # runs stopped by a time limit never end at the same second
+        return f"Equal budgets on this axis (within {EQUAL_WITHIN - 1:.0%}): the runs end between {min(ends):.4g} and {max(ends):.4g} {unit}."
     return (
-        f"Unequal budgets on this axis: the runs end between {min(ends):g} and {max(ends):g} ({unit}); "
+        f"Unequal budgets on this axis: the runs end between {min(ends):.4g} and {max(ends):.4g} {unit}; "
         "a variant's mean and band stop where its first seed ends, and variants compare only where both have data."
     )
 

@@ -99,12 +99,6 @@ def _seconds(run: RunCurves) -> float:
     return run.run.data.metrics.get("seconds", (info.end_time - info.start_time) / 1000)
 
 
-def _worker_seconds(run: RunCurves) -> Optional[float]:
-    """The evaluation workers' busy seconds: CPU time the evaluations took."""
-    busy, workers = run.run.data.metrics.get("evaluator_busy"), run.run.data.params.get("executor.workers")
-    return None if busy is None or workers is None else busy * _seconds(run) * int(workers)
-
-
 def _mean_cell(values: list[float], digits: int = 0) -> str:
     return mean_std(values, digits) if values else "—"
 
@@ -128,7 +122,7 @@ def comparison_table(tasks: dict[str, list[Variant]]) -> list[str]:
                 change = "baseline" if variant is baseline else (difference(theirs, mine).text() if mine and theirs else "—")
                 cells += [_mean_cell(mine, 1), change]
             cost = [
-                _mean_cell([_seconds(run) for run in variant.runs]), _mean_cell(_values(variant, _worker_seconds)),
+                _mean_cell([_seconds(run) for run in variant.runs]), _mean_cell(_values(variant, lambda run: run.run.data.metrics.get("worker_seconds"))),
                 _mean_cell([float(run.steps[-1]) for run in variant.runs]),
                 _mean_cell(_values(variant, lambda run: run.run.data.metrics.get("evaluations"))),
             ]
