@@ -15,7 +15,8 @@ this work included: `plan_finish` estimates what each step costs from what the r
 (`RefereeCost`: per episode, and per lockstep batch of episodes, measured on the starter and the
 search's programs) and, where the full work does not fit in the time it is given,
 makes each step cheaper (fewer held-out episodes and programs, a shorter simplification, a
-smaller video at fewer frames per second); the search stops early enough to leave that time.
+smaller video: down to 15 frames a second, then only the episode's first seconds, never a slide
+show); the search stops early enough to leave that time.
 At the end, `finish` plans again with the time actually left, and each step ends by its slot;
 the summary says where the work was cut (`episodes` of each held-out score, the video's `size`
 and `note`).
@@ -51,7 +52,7 @@ FINISH_SHARE = 0.4  # of a time limit, at most, for the finish when the full wor
 # during the held-out scores): the whole render step, video included, took 4-5 s on 2 loaded cores.
 _RENDER_FIXED_S = 5.0
 _VIDEO_S = 20.0  # seconds of frames for a full-size video at its full frame rate, at most
-_VIDEO_MIN_S = 2.0  # seconds of frames for a small video at a low frame rate
+_VIDEO_MIN_S = 2.0  # seconds of frames for a small, short video
 _SMALL = (320, 240)
 
 

@@ -35,8 +35,8 @@ from colmo.program import parametrize
 from colmo.render import PLOT_FILE, EpisodeMedia, gl, render_episode, render_policy
 from colmo.render.__main__ import main as colmo_render
 from colmo.render.gl import NoGLError
-from colmo.render.plot import plot_episode
-from colmo.render.video import default_camera, render_video, video_frame_steps
+from colmo.render.plot import episode_figure, plot_episode
+from colmo.render.video import MIN_FPS, default_camera, render_video, video_frame_steps
 from colmo.specs import load_spec
 from colmo.trace import STATE_SPEC, EpisodeTrace, TraceError, TraceRecorder
 
@@ -329,6 +329,15 @@ def test_the_plot_shows_the_action_the_simulator_applied(pendulum, pendulum_trac
     trace = dataclasses.replace(pendulum_trace, actions=raw)
     with Image.open(plot_episode(trace, tmp_path / "clamped.png", "clamped", applied)) as image:
         assert image.format == "PNG" and image.size == (1100, 900)
+    # The applied action has the panel's scale; the raw output a scale of its own beside it.
+    raw = np.where(np.arange(len(raw))[:, None] % 2, 100.0, -100.0)
+    applied = pendulum.applied_actions(raw)
+    figure = episode_figure(dataclasses.replace(pendulum_trace, actions=raw), "clamped", applied)
+    action_axes = figure.axes[1]
+    low, high = action_axes.get_ylim()
+    assert -1.5 < low < -1.0 and 1.0 < high < 1.5
+    [raw_axes] = [axes for axes in figure.axes if axes.get_ylabel() == "raw output (dashed)"]
+    assert raw_axes.get_ylim()[1] >= 100.0
 
 
 # --- videos ------------------------------------------------------------------------------------
@@ -357,12 +366,14 @@ def test_mp4_video_lasts_the_episode(name, request, tmp_path, gl_backend):
     assert seconds >= 3.0
 
 
-def test_a_video_under_a_time_budget_has_fewer_frames_and_still_plays_in_real_time(pendulum, pendulum_trace, tmp_path, gl_backend):
-    full = len(video_frame_steps(pendulum_trace.steps, pendulum_trace.control_timestep)[0])
+def test_a_video_under_a_time_budget_is_cut_short_never_a_slide_show(pendulum, pendulum_trace, tmp_path, gl_backend):
+    """Too little time to draw the episode: the first seconds of it, in real time and at 15
+    frames a second of simulated time or more (it used to be the whole episode at 0.5 fps)."""
+    steps, rate = video_frame_steps(pendulum_trace.steps, pendulum_trace.control_timestep)
     path = render_video(pendulum, pendulum_trace, tmp_path / "short.mp4", **SIZE, max_seconds=1e-6)  # as few frames as allowed
     frames, seconds = mp4_frames_and_seconds(path)
-    assert 2 <= frames < full
-    assert seconds >= 3.0
+    assert 2 <= frames < len(steps) and seconds < len(steps) / rate
+    assert frames / seconds >= 0.9 * MIN_FPS
 
 
 def test_gif_video_and_a_frame_that_shows_the_pendulum(pendulum, pendulum_trace, tmp_path, gl_backend):

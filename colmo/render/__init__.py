@@ -77,7 +77,7 @@ def render_episode(
 ) -> EpisodeMedia:
     """Write `episode.png` and, for a MuJoCo environment with OpenGL, `episode.mp4` (or `.gif`
     without imageio-ffmpeg) in `directory`, from a trace of an episode of `env`; the video's
-    frames take about `video_seconds` if given (fewer frames per second: `render_video`)."""
+    frames take about `video_seconds` if given (fewer frames a second down to 15, then the first seconds only: `render_video`)."""
     start = time.monotonic()
     directory = Path(directory)
     applied = env.applied_actions(trace.actions) if isinstance(env, MujocoEnvironment) else None

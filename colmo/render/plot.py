@@ -23,10 +23,18 @@ _HEAT_MAP_LABELLED_ROWS = 30  # up to this many rows, each row's tick shows its 
 
 
 def plot_episode(trace: EpisodeTrace, path: Path, title: str, applied: Optional[np.ndarray] = None) -> Path:
-    """Write a PNG (1100 x 900) of the observations, actions and cumulative reward over the
-    episode; return its path. `applied`: the actions as the simulator applied them (clamped to
+    """Write `episode_figure` as a PNG (1100 x 900); return its path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    episode_figure(trace, title, applied).savefig(path, dpi=100)
+    return path
+
+
+def episode_figure(trace: EpisodeTrace, title: str, applied: Optional[np.ndarray] = None) -> Figure:
+    """The observations, actions and cumulative reward over the episode. `applied`: the actions as the simulator applied them (clamped to
     the actuators' ranges), drawn instead of the policy's, whose raw values, where they differ,
-    are drawn beside them as thin dashed lines.
+    are drawn beside them as thin dashed lines on a scale of their own (the right axis): a raw
+    output of ±100 clamped to ±1 must not flatten the action that was applied.
 
     Up to 10 signals are drawn as labelled lines; more (the cheetah's 17 observations, the
     quadruped's 78) as a heat map with one row per signal, each row coloured from its own minimum
@@ -45,9 +53,11 @@ def plot_episode(trace: EpisodeTrace, path: Path, title: str, applied: Optional[
     if applied is not None and not np.array_equal(applied, trace.actions):
         raw = np.vstack([trace.actions, trace.actions[-1:]])
         if raw.shape[1] <= _LINE_PLOT_MAX_DIMS:
+            raw_axes = action_axes.twinx()
             for i in range(raw.shape[1]):
-                action_axes.plot(times, raw[:, i], linewidth=0.7, linestyle="--", color="0.5", drawstyle="steps-post")
-        action_axes.set_title("applied (clamped to the actuator range); dashed: the policy's raw output", fontsize=9, loc="left")
+                raw_axes.plot(times, raw[:, i], linewidth=0.7, linestyle="--", color="0.5", drawstyle="steps-post")
+            raw_axes.set_ylabel("raw output (dashed)", color="0.4")
+        action_axes.set_title("applied (clamped to the actuator range), left axis; dashed: the policy's raw output, right axis", fontsize=9, loc="left")
     reward_axes.plot(times, np.concatenate([[0.0], np.cumsum(trace.rewards)]), color="tab:green", linewidth=1.5)
     reward_axes.set_ylabel("cumulative reward")
     reward_axes.set_title(f"return {trace.episode_return:.4g} over {trace.steps} steps", fontsize=9, loc="left")
@@ -55,10 +65,7 @@ def plot_episode(trace: EpisodeTrace, path: Path, title: str, applied: Optional[
     reward_axes.set_xlabel("time (s)" if timestep else "step")
     reward_axes.set_xlim(times[0], times[-1])
     figure.suptitle(title)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=100)
-    return path
+    return figure
 
 
 def _plot_signals(figure: Figure, axes: Axes, times: np.ndarray, values: np.ndarray, label: str, short: str, steps: bool = False) -> None:

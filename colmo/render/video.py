@@ -23,6 +23,7 @@ from colmo.render.gl import NoGLError, gl_unavailable_reason, select_gl_backend
 from colmo.trace import STATE_SPEC, EpisodeTrace
 
 DEFAULT_FPS = 30.0
+MIN_FPS = 15.0  # frames a second of simulated time below which a video is a slide show: cut it short instead
 Camera = Union[int, str, mujoco.MjvCamera]
 
 
@@ -92,9 +93,10 @@ def render_video(
     An MP4 needs `imageio-ffmpeg`; without it, or when `path` ends in `.gif`, an animated GIF
     is written at `path` with its suffix changed to `.gif`. `fps` is the target frame rate
     (`video_frame_steps`). `camera` is a model camera (id or name) or an `MjvCamera`; by default
-    `default_camera(env.model)`. With `max_seconds`, the first frame is timed and the frame rate
-    lowered (every k-th frame, still in real time) so that the frames take about that long, and
-    the video ends early if they take longer. Raises `NoGLError` if no OpenGL backend works, `ValueError`
+    `default_camera(env.model)`. With `max_seconds`, the first frame is timed and the frames
+    drawn made fewer so that they take about that long: first every k-th one (still in real
+    time) down to `MIN_FPS`, then only the first seconds of the episode; the video also ends
+    early if drawing takes longer than the first frame said. Raises `NoGLError` if no OpenGL backend works, `ValueError`
     for a trace that does not fit the model.
     """
     if trace.states is None:
@@ -134,8 +136,8 @@ def render_video(
         if max_seconds is not None and len(frame_steps) > 1:
             # Twice the first frame's time per frame: encoding it costs about as much again.
             allowed = max(2, int(max_seconds / (2 * max(time.monotonic() - started, 1e-3))))
-            thin = math.ceil(len(frame_steps) / allowed)
-            frame_steps, frame_rate = frame_steps[::thin], frame_rate / thin
+            thin = max(1, min(math.ceil(len(frame_steps) / allowed), math.floor(frame_rate / MIN_FPS)))
+            frame_steps, frame_rate = frame_steps[::thin][:allowed], frame_rate / thin
             # Should the machine slow down, the video ends early rather than the run late.
             late = itertools.takewhile(lambda _: time.monotonic() < started + max_seconds, frame_steps[2:])
             rest = itertools.chain(frame_steps[1:2], late)  # two frames at least: a video, not a still
