@@ -7,11 +7,14 @@ so a hostile answer costs milliseconds, not minutes and gigabytes. Then the poli
 statically checked (`colmo.sandbox.check`), and refused if it reads a name that nothing defines.
 
 `read_program` raises `Unusable` when no program can be read (the sample is `unusable`) and
-`ForbiddenProgram` when the program is refused (the sample `failed`).
+`ForbiddenProgram` when the program is refused (the sample `failed`), and nothing else for any
+text: a character that is not text (U+FFFD, which a generator's lone surrogate or a file's
+undecodable byte became) is `Unusable` too, before anything parses it.
 """
 
 from __future__ import annotations
 
+import re
 import textwrap
 from pathlib import Path
 from typing import Optional, Sequence
@@ -23,6 +26,7 @@ from colmo.program import ParametricProgram, ProgramError, instantiate, measure,
 from colmo.sandbox.check import ForbiddenProgram, check_tree, parse_program
 from colmo.sandbox.namespace import PREDEFINED_NAMES
 
+_NOT_TEXT = re.compile("[\ufffd\ud800-\udfff]")  # U+FFFD: what a generator's lone surrogate became
 MAX_ANSWER_CHARS = 100_000  # a 1024-token answer is about 4,000 characters
 MAX_NESTING = 100  # brackets; Python's own parser stops at 200
 MAX_PROGRAM_NODES = 20_000  # the paper's policies have a few hundred
@@ -55,6 +59,10 @@ def read_program(
     AST nodes (`database.max_nodes`: readability) is refused."""
     if len(text) > MAX_ANSWER_CHARS:
         raise Unusable(f"the output has {len(text)} characters, more than the {MAX_ANSWER_CHARS} allowed")
+    not_text = _NOT_TEXT.search(text)
+    if not_text:
+        line = text.count("\n", 0, not_text.start()) + 1
+        raise Unusable(f"the output holds a character that is not text at line {line} (an undecodable byte or a lone surrogate)")
     if nesting(text) > MAX_NESTING:
         raise Unusable(f"the output nests brackets more than {MAX_NESTING} deep")
     try:

@@ -265,3 +265,15 @@ def test_a_store_written_before_model_calls_were_counted_opens_with_one_call_per
     reopened.add(SampleRecord(sample=1, batch=1, status="duplicate", island=0, parent_keys=(), generator="new", raw="y", model_calls=3, prompt_shown="z"))
     assert [(record.sample, record.model_calls, record.prompt_shown) for record in reopened.records()] == [(0, 1, ""), (1, 3, "z")]
     reopened.close()
+
+
+def test_an_answer_holding_a_lone_surrogate_is_an_unusable_sample_and_the_search_goes_on(tmp_path):
+    # The OpenAI client returns "\ud800" for a server's JSON "\ud800": it used to raise
+    # UnicodeEncodeError out of the search (traceback, exit 1, no summary).
+    answers = ["```python\ndef policy(obs):\n    return -0.5 * obs[2]  # \ud800\n```", "```python\ndef policy(obs):\n    return -0.4 * obs[2]\n```"]
+    summary, rows, _ = scripted_search(tmp_path, answers, "gfo=none")
+    assert [row[0] for row in rows] == ["unusable", "evaluated"] and summary.samples == 2
+    with sqlite3.connect(tmp_path / "run" / "programs.db") as connection:
+        [(raw, failure)] = connection.execute("SELECT raw, failure FROM samples WHERE sample = 0").fetchall()
+    assert "# \ufffd" in raw and failure == "unusable output: the output holds a character that is not text at line 3 (an undecodable byte or a lone surrogate)"
+    assert json.loads((tmp_path / "run" / "summary.json").read_text())["unusable_outputs"] == 1

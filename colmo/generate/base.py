@@ -1,6 +1,11 @@
 """The generator interface: a `Generator` turns one `Prompt` into `n` raw texts (`Generation`s,
 `n` = `llm.batch_size`); pulling the policy out of a model's answer is the search loop's job
-(`colmo.extract`)."""
+(`colmo.extract`).
+
+A `Generation` is where a generator's text enters colmo: a character that is not text (a lone
+surrogate, which the OpenAI client returns for a server's JSON `"\ud800"`) becomes U+FFFD there,
+so that the text can be stored, logged and shown, and intake refuses it as unusable
+(`colmo.intake.read_program`); it used to end the whole search with a `UnicodeEncodeError`."""
 
 from __future__ import annotations
 
@@ -37,12 +42,25 @@ class Generation:
     # without copying it; empty for a completion, whose `prefix` holds it, and for `mutate`.
     shown: str = ""
 
+    def __post_init__(self) -> None:
+        for name in ("text", "prefix", "shown"):
+            object.__setattr__(self, name, as_text(getattr(self, name)))
+
     def after(self, discarded: "Generation") -> "Generation":
         """This answer, charged with the calls, tokens and seconds of a discarded one before it."""
         return dataclasses.replace(
             self, prompt_tokens=self.prompt_tokens + discarded.prompt_tokens, completion_tokens=self.completion_tokens + discarded.completion_tokens,
             seconds=self.seconds + discarded.seconds, calls=self.calls + discarded.calls,
         )
+
+
+def as_text(text: str) -> str:
+    """`text` with every character UTF-8 cannot encode (lone surrogates) replaced by U+FFFD."""
+    try:
+        text.encode("utf-8")
+        return text
+    except UnicodeEncodeError:  # a pair of surrogates is one character again; a lone one is U+FFFD
+        return text.encode("utf-16", "surrogatepass").decode("utf-16", "replace")
 
 
 class GeneratorError(RuntimeError):
