@@ -67,7 +67,7 @@ def main(cfg: SearchConfig) -> Optional[float]:
     from colmo.progress import progress
     from colmo.record import summary_failure
     from colmo.search import Search
-    from colmo.store import holds_run, open_for_resume, read_summary, run_settings
+    from colmo.store import BEST_POLICY_FILE, holds_run, open_for_resume, read_summary, run_settings
 
     run_dir = Path(HydraConfig.get().runtime.output_dir)
     if sweep_job and not cfg.resume and holds_run(run_dir):  # the sweep runs again into its directory
@@ -97,6 +97,9 @@ def main(cfg: SearchConfig) -> Optional[float]:
     elif summary.resumable:
         overrides = " ".join(o for o in HydraConfig.get().overrides.task if not o.startswith("resume="))
         print(f"resume with: colmo {overrides} resume={summary.run_dir}".replace("  ", " "), file=sys.stderr)
+        if summary.best_code:  # what the finish would have made, for the best so far, without resuming
+            policy = f"task={cfg.task.name} policy_file={Path(summary.run_dir) / BEST_POLICY_FILE}"
+            print(f"or score, simplify and film its best so far: colmo-evaluate {policy}; colmo-simplify {policy}; colmo-render {policy}", file=sys.stderr)
     if summary.failure is None:
         return summary.best_score
     if summary.stop_reason == "interrupted":  # Ctrl-C stops a sweep too
