@@ -284,6 +284,16 @@ def test_the_caption_says_whether_budgets_were_equal_on_the_axis(store):
     assert budget_note(tasks, "samples").startswith("Equal budgets on this axis (within 10%): the runs end between 8 and 8.5 ")
     tasks["pendulum"][0].runs[0].x[-1] = 16.0
     assert budget_note(tasks, "samples").startswith("Unequal budgets on this axis: the runs end between 8 and 16 ")
+    # Runs given the same time limit and stopped by it had equal budgets in seconds, wherever their curves end.
+    experiment_id = client.create_experiment("timed")
+    for index, (method, seed) in enumerate((("none", 0), ("oneplusone", 0))):
+        log_run(client, experiment_id, index, Logged(f"t{index}", method, seed, [1.0, 2.0 + index], None), "search.max_seconds=90",
+                tags={"colmo.stop_reason": "max_seconds"})
+    timed = group(read_runs(client, ["timed"], axis="seconds").curves)
+    timed["pendulum"][0].runs[0].x[-1] = 30.0
+    assert budget_note(timed, "seconds") == "Equal budgets on this axis: every run was given search.max_seconds=90.0 and stopped by it."
+    by_samples = group(read_runs(client, ["timed"]).curves)  # not stopped by max_samples: by where the curves end
+    assert budget_note(by_samples, "samples").startswith("Equal budgets on this axis: every run ends at 8 ")
 
 
 def test_a_run_that_evaluated_no_program_of_its_own_is_left_out(store):

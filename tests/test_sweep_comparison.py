@@ -36,6 +36,8 @@ def test_a_sweep_ends_with_one_line_per_job_and_the_command_of_its_report(tmp_pa
     experiment = client.get_experiment_by_name("pendulum").experiment_id
     parents = [run for run in client.search_runs([experiment]) if "colmo.sweep" in run.data.tags]
     assert [parent.data.tags["colmo.sweep"] for parent in parents] == [report.rsplit("sweep=", 1)[1]]
+    children = [run for run in client.search_runs([experiment]) if "colmo.sweep" not in run.data.tags]
+    assert [child.data.tags["colmo.stop_reason"] for child in children] == ["max_samples"] * 2  # which limit each reached
     # An unrelated run beside the sweep: the printed command still compares exactly its 2 jobs.
     assert run_colmo("colmo", *TINY, "seed=2", cwd=tmp_path, timeout=600).returncode == 0
     out = tmp_path / "report"

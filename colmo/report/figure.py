@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 
 from colmo.report.selection import AXES, Variant
 from colmo.report.tables import dims
+from colmo.track import STOP_REASON_TAG
 
 EQUAL_WITHIN = 1.1  # budgets whose ends differ by at most 10% are equal for the caption
 COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:cyan", "tab:olive", "tab:pink", "0.3")
@@ -45,11 +46,23 @@ def draw_seeds(ax: Axes, name: str, seeds: Sequence[tuple[Sequence[float], Seque
         ax.fill_between(grid, values.min(axis=0), values.max(axis=0), color=color, alpha=0.18, step="post", linewidth=0)
 
 
+# The limit that gives every run of a sweep the same budget on an axis, and the stop reason of a
+# run that used it (`colmo.track.STOP_REASON_TAG`).
+_LIMITS = {"samples": ("search.max_samples", "max_samples"), "seconds": ("search.max_seconds", "max_seconds")}
+
+
 def budget_note(tasks: dict[str, list[Variant]], axis: str) -> str:
-    """Whether the runs had equal budgets on `axis`: where they all end at the same x, the
-    curves compare at equal budgets; else the range of their ends, and where to compare."""
-    ends = [run.x[-1] for variants in tasks.values() for variant in variants for run in variant.runs]
+    """Whether the runs had equal budgets on `axis`: every run given the same limit on it and
+    stopped by that limit; else where they all end at the same x (within 10%); else the range
+    of their ends, and where to compare."""
+    runs = [run for variants in tasks.values() for variant in variants for run in variant.runs]
+    ends = [run.x[-1] for run in runs]
     unit = AXES[axis][1]
+    if axis in _LIMITS:
+        param, reason = _LIMITS[axis]
+        limits = {run.run.data.params.get(param) for run in runs}
+        if len(limits) == 1 and all(run.run.data.tags.get(STOP_REASON_TAG) == reason for run in runs):
+            return f"Equal budgets on this axis: every run was given {param}={limits.pop()} and stopped by it."
     if min(ends) == max(ends):
         return f"Equal budgets on this axis: every run ends at {min(ends):g} {unit}."
     if max(ends) <= EQUAL_WITHIN * min(ends):  # runs stopped by a time limit never end at the same second

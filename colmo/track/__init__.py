@@ -21,11 +21,20 @@ from colmo.track.backend import (
     sqlite_path,
 )
 from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE
-from colmo.track.runs import MlflowTracker, TrackedRun, draw_best_so_far, flatten, start_run, start_search_run, track_optimize
+from colmo.track.runs import (
+    STOP_REASON_TAG,
+    MlflowTracker,
+    TrackedRun,
+    draw_best_so_far,
+    flatten,
+    start_run,
+    start_search_run,
+    track_optimize,
+)
 from colmo.track.sweep import SWEEP_TAG
 
 __all__ = [
-    "CLASSIC_ML", "EXPERIMENT_KIND_TAG", "PROGRAM_COLUMNS", "PROGRAMS_PAGE", "PROGRAMS_TABLE", "SWEEP_TAG",
+    "CLASSIC_ML", "EXPERIMENT_KIND_TAG", "PROGRAM_COLUMNS", "PROGRAMS_PAGE", "PROGRAMS_TABLE", "STOP_REASON_TAG", "SWEEP_TAG",
     "VIEW_TAG", "MlflowTracker", "TrackedRun", "browse_hint", "connect", "default_tracking_uri", "draw_best_so_far", "flatten",
     "open_experiment", "retry_locked", "sqlite_path", "start_run", "start_search_run", "track_optimize",
 ]

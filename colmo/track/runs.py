@@ -68,6 +68,7 @@ from colmo.track.sweep import sweep_parent, update_parent
 log = logging.getLogger("colmo.track")
 
 TABLE_EVERY_S = 30.0
+STOP_REASON_TAG = "colmo.stop_reason"  # max_samples, max_seconds, ...: which limit a finished search reached
 
 
 def flatten(values: dict[str, Any], prefix: str = "") -> dict[str, str]:
@@ -101,7 +102,7 @@ def _git_commit() -> Optional[str]:
 def _status(summary: Summary) -> str:
     if summary.stop_reason == "interrupted":
         return KILLED
-    if summary.resumable:  # the generator failed, the disk is full
+    if summary.failure is not None:  # the generator failed, the disk is full, no program evaluated
         return FAILED
     return FINISHED
 
@@ -229,6 +230,7 @@ class MlflowTracker:
         for name in summary.robustness.get("files", ()):  # the best policy under model mismatch
             self.client.log_artifact(self.run_id, str(run_dir / name), "robustness")
         self.run.log_hydra_config()
+        retry_locked(self.client.set_tag, self.run_id, STOP_REASON_TAG, summary.stop_reason)  # which limit the run reached
         if self.steps:
             self.client.log_figure(self.run_id, self._figure(summary.task), BEST_SO_FAR_PLOT)
         self.run.end(_status(summary))
