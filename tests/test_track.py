@@ -95,10 +95,13 @@ def test_a_sweep_is_one_parent_run_with_a_child_per_job(sweep):
     cwd, client, experiment, runs = sweep
     assert experiment.tags[EXPERIMENT_KIND_TAG] == CLASSIC_ML  # MLflow 3.0-3.4's UI opens it in the classic ML view
     view = json.loads(experiment.tags[VIEW_TAG])  # the run list's columns in MLflow's UI (browse_hint)
-    assert {f"metrics.`{m}`" for m in (*KEY_METRICS, "runs")} <= set(view["selectedColumns"])
-    # Newest first: the order under which MLflow's UI nests each job under its sweep's parent run
-    # (sorted by a metric, it lists them flat).
-    assert (view["orderByKey"], view["orderByAsc"]) == ("attributes.start_time", False)
+    assert {f"metrics.`{m}`" for m in ("best_score", "best_heldout_score", "samples", "seconds", "runs")} <= set(view["selectedColumns"])
+    # Seed, generator and the scores first; each job a row of its GFO method's open group, best first
+    # (nested under the sweep's parent, the jobs hid in its collapsed row).
+    assert view["columnOrder"][:4] == ["params.`seed`", "params.`llm.name`", "metrics.`best_score`", "metrics.`best_heldout_score`"]
+    assert (view["orderByKey"], view["orderByAsc"]) == ("metrics.`best_score`", False)
+    assert view["groupBy"]["groupByKeys"] == [{"mode": "param", "groupByData": "gfo.method"}]
+    assert {"param.gfo.method.none", "param.gfo.method.oneplusone", "param.gfo.method.bo"} <= {k for k, v in view["groupsExpanded"].items() if v}
     assert experiment.tags["mlflow.experiment.primaryMetric.name"] == "best_score"  # the chart view opens on it
     assert experiment.tags["mlflow.experiment.primaryMetric.greaterIsBetter"] == "True"
     parents = [run for run in runs if "mlflow.parentRunId" not in run.data.tags]
@@ -307,7 +310,7 @@ def test_an_experiment_made_before_gets_the_classic_kind_and_colmos_view(store):
     assert open_experiment(uri, "old")[1] == experiment_id
     tags = MlflowClient(uri).get_experiment(experiment_id).tags
     assert tags[EXPERIMENT_KIND_TAG] == CLASSIC_ML
-    assert json.loads(tags[VIEW_TAG])["orderByKey"] == "attributes.start_time"
+    assert json.loads(tags[VIEW_TAG])["groupBy"]["groupByKeys"][0]["groupByData"] == "gfo.method"
     assert tags["mlflow.experiment.primaryMetric.name"] == "best_heldout_score"
 
 

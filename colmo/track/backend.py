@@ -12,10 +12,11 @@ created, so runs launched from any directory land in one place. Any other URI
 Experiments (`tracker.experiment`, else the task name) are tagged as classic ML experiments
 (`mlflow.experimentKind: custom_model_development`, which MLflow 3.0-3.4's UI reads), with
 `best_score` as their primary metric (greater is better: the metric the run list's chart view
-opens on) and a shared view of the run list (`mlflow.sharedViewState.colmo`): the key metrics
-and GFO/LLM/seed as columns, newest first. The order is the one under which MLflow's UI (3.17)
-nests child runs under their parent; sorted by a metric it lists them flat, so the jobs of a
-sweep sit under their sweep's parent run, whose columns hold their best scores. MLflow 3.17's
+opens on) and a shared view of the run list (`mlflow.sharedViewState.colmo`, `view_state`):
+the runs grouped by GFO method, each group open with its average on its row, best first, seed
+and generator, then the key metrics as the first columns. (MLflow's UI does not carry which
+parent rows are open in a shared view; sorted by start time it nested a sweep's jobs under its
+parent's one collapsed row.) MLflow 3.17's
 UI opens in its GenAI view (traces, judges) whatever the kind tag says, and shows no metric
 column until one is chosen, so each run logs where to look: `browse_hint`, the address of
 `ui_path(experiment_id)`, which selects the classic view and colmo's columns (the UI's
@@ -43,7 +44,7 @@ import math
 import re
 import time
 from pathlib import Path
-from typing import Any, Callable, Iterator, Optional, TypeVar
+from typing import Any, Callable, Iterator, Optional, Sequence, TypeVar
 
 from mlflow import MlflowClient
 from mlflow.entities import Metric, Param, RunStatus
@@ -56,21 +57,30 @@ ARTIFACTS_DIR = "mlartifacts"
 EXPERIMENT_KIND_TAG = "mlflow.experimentKind"
 CLASSIC_ML = "custom_model_development"  # MLflow 3's value for a classic (not GenAI) experiment
 PRIMARY_METRIC = "best_score"
-# A view of the run list that MLflow's UI opens from `?viewStateShareKey=colmo`: the columns a
-# person compares searches by (the UI shows no metric column unless chosen), newest first: the
-# one order besides none under which the UI nests child runs under their parent.
+# A view of the run list that MLflow's UI opens from `?viewStateShareKey=colmo`: the runs grouped
+# by GFO method (each group's row the average over its runs, every group open: a sweep's jobs
+# are rows of their variant, where nesting under the sweep's parent run hid them in a collapsed
+# row; parents fall into MLflow's "Additional runs"), best first, and the columns a person
+# compares searches by in this order (the UI shows no metric column unless chosen): seed and
+# generator, then the scores, samples and seconds; the rest of the view's metrics to the right.
 VIEW_KEY = "colmo"
 VIEW_TAG = f"mlflow.sharedViewState.{VIEW_KEY}"
+VIEW_PARAMS = ("seed", "llm.name")
 VIEW_METRICS = (
-    PRIMARY_METRIC, "best_heldout_score", "runs", "samples", "programs_evaluated", "valid_program_rate",
-    "evaluations_per_second", "evaluations", "steps", "seconds",
+    PRIMARY_METRIC, "best_heldout_score", "samples", "seconds", "worker_seconds", "runs", "programs_evaluated", "valid_program_rate",
+    "evaluations", "steps",
 )
-VIEW_PARAMS = ("gfo.method", "gfo.budget", "llm.name", "seed")
-VIEW_ORDER = "attributes.start_time"
-VIEW_STATE = json.dumps({
-    "selectedColumns": [f"metrics.`{m}`" for m in VIEW_METRICS] + [f"params.`{p}`" for p in VIEW_PARAMS],
-    "orderByKey": VIEW_ORDER, "orderByAsc": False,
-})
+VIEW_GROUP = "gfo.method"
+
+
+def view_state(groups: Sequence[str]) -> str:
+    """The view's JSON, with the group of each of `groups` (values of `VIEW_GROUP`) open."""
+    columns = [f"params.`{p}`" for p in VIEW_PARAMS] + [f"metrics.`{m}`" for m in VIEW_METRICS]
+    return json.dumps({
+        "selectedColumns": columns, "columnOrder": columns, "orderByKey": f"metrics.`{PRIMARY_METRIC}`", "orderByAsc": False,
+        "groupBy": {"aggregateFunction": "average", "groupByKeys": [{"mode": "param", "groupByData": VIEW_GROUP}]},
+        "groupsExpanded": {f"param.{VIEW_GROUP}.{group}": True for group in groups},
+    })
 METRIC_DIGITS = 4
 MLFLOW_UI_PORT = 5000  # `mlflow ui`'s default, named in the command colmo logs
 _LOCK_RETRIES = 6
@@ -124,8 +134,10 @@ def open_experiment(uri: str, name: str) -> tuple[MlflowClient, str]:
     experiment with `best_score` as its primary metric and colmo's view of its run list), safely
     when several processes start at once. An experiment made before gets the tags it lacks, and
     colmo's view as this colmo lays it out."""
+    from colmo.optimize.methods import METHODS  # every method registered by now: each one's group opens
+
     tags = {
-        EXPERIMENT_KIND_TAG: CLASSIC_ML, VIEW_TAG: VIEW_STATE,
+        EXPERIMENT_KIND_TAG: CLASSIC_ML, VIEW_TAG: view_state(list(METHODS)),
         MLFLOW_EXPERIMENT_PRIMARY_METRIC_NAME: PRIMARY_METRIC, MLFLOW_EXPERIMENT_PRIMARY_METRIC_GREATER_IS_BETTER: "True",
     }
     with _store_lock(uri):
