@@ -40,12 +40,14 @@ from __future__ import annotations
 
 import ast
 import bisect
+import builtins
 import math
 import re
 from typing import Iterator
 
 from colmo import astutil
 from colmo.astutil import bound_names, rename, unbound_names
+from colmo.sandbox.namespace import PREDEFINED_NAMES
 
 _FENCE = re.compile(r"\s*```")
 # Lines that can open a stretch of code (definition, import, assignment); prose rarely does.
@@ -62,6 +64,10 @@ _PARSE_BUDGET_FACTOR = 10
 _PARSE_BUDGET_BASE = 50_000
 # Shorter cuts tried on a broken statement before the run ends before it (each reads it again).
 _MAX_CUTS = 3
+
+
+# Names a shown function may never take: every builtin and every name a program finds predefined.
+_RESERVED_NAMES = frozenset(dir(builtins)) | PREDEFINED_NAMES
 
 
 class ExtractionError(ValueError):
@@ -93,8 +99,8 @@ def _extract(text: str, function_name: str, prefix: str, shown: str) -> str:
         if not _versions(statements, version):
             statements = [s for module in _code_regions(text, budget) for s in module.body]
         versions = _versions(statements, version)
-        if shown:  # before the answer's statements: a definition of the answer's replaces a shown one
-            statements = astutil.parse(shown).body + statements
+        if shown:  # before the answer's statements, what the shown code may supply (`_supplied`)
+            statements = _supplied(shown, statements) + statements
     if not versions:
         signature = re.search(rf"^[ \t]*def\s+{version.pattern}\s*\(", text, re.MULTILINE)
         if signature:
@@ -319,6 +325,19 @@ def _free_names(statement: ast.stmt) -> set[str]:
     local = {n.id for n in names if not isinstance(n.ctx, ast.Load)} | {a.arg for a in ast.walk(statement) if isinstance(a, ast.arg)}
     declared_global = {name for n in ast.walk(statement) if isinstance(n, ast.Global) for name in n.names}
     return loaded - (local - declared_global)
+
+
+def _supplied(shown: str, answer: list[ast.stmt]) -> list[ast.stmt]:
+    """What the code a chat answer's prompt showed may add to the answer: its function
+    definitions, and nothing else (`_needed` then keeps those the answer calls, and the ones they
+    call). One program must not change another, and a shown program is another program: so no
+    module-level statement of any other kind (a shown `np = math` or `import math as np` would
+    rebind the answer's `np`; the imports a shown function needs are the answer's own, or those
+    added for names like `np`), no function under a name the answer binds itself (its own
+    definition, import or assignment wins), and none under a builtin's or another predefined
+    name (a shown `def float(x)` would clip every `float(...)` of the answer)."""
+    taken = {name for statement in answer for name in bound_names(statement)} | _RESERVED_NAMES
+    return [s for s in astutil.parse(shown).body if isinstance(s, ast.FunctionDef) and s.name not in taken]
 
 
 def _needed(chosen: ast.FunctionDef, statements: list[ast.stmt]) -> list[ast.stmt]:

@@ -604,3 +604,45 @@ def test_builtins_constants_and_names_bound_anywhere_are_defined():
             return float(np.clip(total, -1, 1)) if isinstance(total, float) else 0.0
     """)
     assert read_program(code, ("numpy", "math")).skeleton.count("params[") >= 3
+
+
+def hostile_shown(module_code: str) -> str:
+    """The code a prompt shows when a stored program holds `module_code` beside a good policy."""
+    from colmo.database import Selection, StoredProgram
+    from colmo.prompt import build_prompt
+
+    hostile = f"import math\nimport numpy as np\n{module_code}\n\ndef policy(obs):\n    return -2.0 * np.arctan2(obs[1], obs[0])"
+    programs = [StoredProgram("a", "def policy(obs):\n    return 0.0", 0.0, 0, 0), StoredProgram("b", hostile, 500.0, 0, 1)]
+    return build_prompt("Swing the pole up.", Selection(0, programs)).shown_code
+
+
+@pytest.mark.parametrize("module_code", ["np = math", "import math as np", "np = None"])
+def test_a_shown_program_cannot_rebind_a_name_of_the_answer(module_code):
+    # A stored `np = math` scored (math.sin works on floats) and was kept in every later answer
+    # whose prompt showed it: "module 'math' has no attribute 'arctan2'".
+    shown = hostile_shown(module_code)
+    assert module_code in shown
+    for answer in ("```python\nimport numpy as np\n\ndef policy(obs):\n    return -np.arctan2(obs[1], obs[0])\n```",
+                   "```python\ndef policy(obs):\n    return -np.arctan2(obs[1], obs[0])\n```"):  # np from the standard import
+        extracted = extract_policy(answer, shown=shown)
+        assert module_code not in extracted and "import numpy as np" in extracted
+        namespace: dict = {}
+        exec(extracted, namespace)
+        assert namespace["policy"]([0.0, 1.0, 0.0]) == pytest.approx(-math.pi / 2)
+
+
+@pytest.mark.parametrize("name", ["float", "abs", "min", "max", "round", "params"])
+def test_a_shown_program_cannot_take_over_a_builtin_or_predefined_name(name):
+    shown = hostile_shown(f"def {name}(*args):\n    return 0.05")
+    answer = f"```python\ndef policy(obs):\n    return {name}(-0.5 * obs[2])\n```"
+    assert f"def {name}(" not in extract_policy(answer, shown=shown)
+
+
+def test_a_name_the_answer_binds_is_never_taken_from_the_shown_code():
+    shown = hostile_shown("def sin(x):\n    return 0.0\n\ndef gain(obs):\n    return 99.0")
+    answer = "```python\nfrom math import sin\ngain = 2.0\n\ndef policy(obs):\n    return -gain * sin(obs[1])\n```"
+    extracted = extract_policy(answer, shown=shown)
+    assert "def sin" not in extracted and "def gain" not in extracted and "return 99.0" not in extracted
+    namespace: dict = {}
+    exec(extracted, namespace)
+    assert namespace["policy"]([0.0, math.pi / 2, 0.0]) == pytest.approx(-2.0)
