@@ -28,11 +28,12 @@ import copy
 import dataclasses
 import math
 import re
+from collections import deque
 from dataclasses import dataclass
 from typing import Sequence
 
 from colmo import astutil
-from colmo.astutil import bound_names, is_docstring, rename
+from colmo.astutil import bound_names, identifiers, is_docstring, rename
 from colmo.database import Selection
 from colmo.specs import DEFAULT_IMPORTS
 
@@ -173,16 +174,21 @@ def _render(codes: list[str], function_name: str) -> tuple[list[str], list[str],
         # calls them) would be replaced by that version: it is shown under a name of its own.
         for helper in helpers:
             renames.update({name: f"{name}_v{version}" for name in bound_names(helper) if re.fullmatch(rf"{function_name}_v\d+", name)})
-        # Renaming one helper changes the text of the helpers that use it: repeat to a fixpoint.
-        changed = True
-        while changed:
-            changed = False
-            for helper in helpers:
-                text = ast.unparse(_renamed(helper, renames))
-                for name in bound_names(helper):
-                    if name not in renames and shown.get(name, text) != text:
-                        renames[name] = f"{name}_v{version}"
-                        changed = True
+        # A helper whose text differs from the shown one of its name is renamed; renaming it
+        # changes the text of the helpers that name it, which are then looked at again (and only
+        # they: looking at every helper until nothing changed was quadratic in a chain of helpers).
+        naming: dict[str, list[int]] = {}
+        for index, helper in enumerate(helpers):
+            for name in identifiers(helper):
+                naming.setdefault(name, []).append(index)
+        pending = deque(range(len(helpers)))
+        while pending:
+            helper = helpers[pending.popleft()]
+            text = ast.unparse(_renamed(helper, renames))
+            for name in bound_names(helper):
+                if name not in renames and shown.get(name, text) != text:
+                    renames[name] = f"{name}_v{version}"
+                    pending.extend(naming.get(name, ()))
         for helper in helpers:
             text = ast.unparse(_renamed(helper, renames))
             definitions[text] = None
