@@ -327,7 +327,7 @@ def _simplify(
     try:
         result = simplify_program(
             executor, evaluator, heldout, record.code, cfg.gfo, options.tolerance, cfg.seed, options.max_rounds,
-            batch_size, stop=lambda: _left(until) <= 0,
+            batch_size, stop=lambda: _left(until) <= 0, max_seconds=options.max_seconds,
         )
     except RunError as error:  # the best program fails where the simplifier measures it
         log.warning("best policy not simplified: %s", error)

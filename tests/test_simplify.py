@@ -644,3 +644,29 @@ def test_the_command_line_config_composes_and_checks_the_tolerance():
     assert (cfg.task.name, cfg.gfo.method, cfg.simplify.tolerance, cfg.evaluation.episodes) == ("cheetah", "none", 0.05, 100)
     with pytest.raises(ConfigError, match=r"simplify.tolerance must be in \[0, 1\), got 1.5"):
         compose("simplify", "policy_file=p.py", "simplify.tolerance=1.5")
+
+
+def chained_assignments(statements: int) -> str:
+    """A good controller followed by `statements` chained assignments (issue 33: 1,500 of them
+    kept colmo-simplify in its first round for minutes; each deletion parses the whole program)."""
+    body = "".join(f"    x{i} = x{i - 1} + 0.001 * obs[{i % 3}]\n" for i in range(1, statements))
+    return f"import numpy as np\n\ndef policy(obs):\n    x0 = obs[0]\n{body}    return -2.0 * np.arctan2(obs[1], obs[0]) - 0.5 * obs[2] + 0.0 * x{statements - 1}\n"
+
+
+def test_making_candidates_stops_when_asked():
+    code = chained_assignments(300)
+    asked = []
+    stop = lambda: asked.append(1) or len(asked) > 5  # noqa: E731
+    assert len(deletion_candidates(code, stop=stop)) <= 5 and len(asked) == 6
+    assert deletion_candidates(code, stop=lambda: True) == []
+
+
+def test_a_time_limit_ends_the_simplification_with_the_best_program_so_far(executor, evaluators):
+    from colmo.config import GFOConfig
+    from colmo.simplify import simplify_program
+
+    train, heldout = evaluators
+    code = chained_assignments(300)  # its candidates alone would take over a minute to make
+    result = simplify_program(executor, train, heldout, code, GFOConfig(method="none", budget=1), max_seconds=2.0)
+    assert result.size.nodes <= result.size_initial.nodes and result.scores.train >= result.scores_initial.train - 0.01 * abs(result.scores_initial.train)
+    assert len(result.steps) <= 1  # at most the static pass: no round of deletions had the time

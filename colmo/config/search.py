@@ -58,9 +58,13 @@ class SimplifyConfig:
     tolerance: float = option(0.01, "share of the original training score a simplified program may lose (its held-out gap may widen as much)")
     max_rounds: int = option(200, "at most this many deletions")
     batch_size: Optional[int] = option(None, "candidates scored per executor call, largest deletion first; null: 4 per worker")
+    max_seconds: Optional[float] = option(
+        600.0, "stop after this many seconds with the shortest program so far (a search's finish also stops at its own deadline); null: no limit",
+    )
 
     def __post_init__(self) -> None:
         require(0 <= self.tolerance < 1, f"simplify.tolerance must be in [0, 1), got {self.tolerance}")
+        require(self.max_seconds is None or self.max_seconds > 0, f"simplify.max_seconds must be > 0 or null, got {self.max_seconds}")
         at_least(self, "simplify", max_rounds=0)
         require(self.batch_size is None or self.batch_size >= 1, f"simplify.batch_size must be >= 1 or null, got {self.batch_size}")
 

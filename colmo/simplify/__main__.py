@@ -55,7 +55,8 @@ def main(cfg: SimplifyAppConfig) -> None:
             cfg.policy_file, cfg.simplify.tolerance, len(evaluator.seeds), len(heldout.seeds), cfg.gfo.method,
         )
         result = simplify_program(
-            session.executor, evaluator, heldout, code, cfg.gfo, cfg.simplify.tolerance, cfg.seed, cfg.simplify.max_rounds, cfg.simplify.batch_size
+            session.executor, evaluator, heldout, code, cfg.gfo, cfg.simplify.tolerance, cfg.seed, cfg.simplify.max_rounds, cfg.simplify.batch_size,
+            max_seconds=cfg.simplify.max_seconds,
         )
 
     print(_report(result, len(evaluator.seeds), len(heldout.seeds)))

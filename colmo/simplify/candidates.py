@@ -175,9 +175,11 @@ def _negated(node: ast.expr) -> ast.expr:
     return ast.UnaryOp(ast.USub(), node)
 
 
-def deletion_candidates(code: str, function_name: str = "policy") -> list[Candidate]:
+def deletion_candidates(code: str, function_name: str = "policy", stop: Callable[[], bool] = lambda: False) -> list[Candidate]:
     """Every one-step simplification of `code` (see the module docstring), each cleaned by
-    `remove_dead_code`, strictly smaller than `code`, without duplicates, in source-walk order."""
+    `remove_dead_code`, strictly smaller than `code`, without duplicates, in source-walk order;
+    those made before `stop()` says so, which is asked before each (each costs a parse of the
+    whole program: a program of a few hundred statements has thousands, minutes of work)."""
     tree = astutil.parse(code)
     strip_docstrings(tree)
     nodes = node_count(tree)
@@ -190,6 +192,8 @@ def deletion_candidates(code: str, function_name: str = "policy") -> list[Candid
     # and gives the same tree, walked in the same order, whenever unparsing loses nothing.
     reparses = ast.dump(astutil.parse(source)) == ast.dump(tree)
     for node, description, edit in _edits(tree, function_name, parents):
+        if stop():
+            break
         parent, name, index = parents[id(node)]
         if reparses:
             copied = astutil.parse(source)

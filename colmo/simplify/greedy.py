@@ -225,7 +225,7 @@ def simplify(
     rounds = 0
     while rounds < max_rounds and not stop():
         rounds += 1
-        candidates = deletion_candidates(current, function_name)
+        candidates = deletion_candidates(current, function_name, stop)
         choice = _best_deletion(candidates, scorer, rule, batch_size, stop)
         if choice is None:
             log.info("round %d: none of %d deletions is acceptable", rounds, len(candidates))

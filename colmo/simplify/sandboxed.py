@@ -22,6 +22,7 @@ of docs/pendulum-10min scores half the candidates that whole rounds do (436 agai
 from __future__ import annotations
 
 import math
+import time
 from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
 from colmo.errors import RunError
@@ -99,6 +100,7 @@ def simplify_program(
     max_rounds: int = 200,
     batch_size: Optional[int] = None,
     stop: Callable[[], bool] = lambda: False,
+    max_seconds: Optional[float] = None,
 ) -> SimplifyResult:
     """Simplify a policy program of a task: dead code out, constants folded, deletions that cost
     at most `tolerance` of the training score (and do not widen the held-out gap by more), and
@@ -109,8 +111,8 @@ def simplify_program(
     (`colmo.heldout.heldout_evaluator`); every score in the result is the referee's. `code` is
     a program as the intake returns it (`colmo.extract.extract_policy`). `batch_size` is the
     number of candidates per executor call (None: `BATCH_PER_WORKER` per worker); `max_rounds`
-    and `stop()` (a search's deadline) cut the greedy search short, keeping the best program so
-    far.
+    `stop()` (a search's deadline) and `max_seconds` (from now) cut the greedy search short,
+    keeping the best program so far.
 
     Its callers: the finish of a search, on its best program before the executor closes, with
     `stop` at the finish's deadline (`colmo.finish`), and `colmo-simplify` on a policy file
@@ -118,6 +120,9 @@ def simplify_program(
     `result.code` is the simplified policy.
 
     Raises RunError if the program fails on the training episodes (nothing to keep)."""
+    if max_seconds is not None:
+        deadline, deadline_stop = time.monotonic() + max_seconds, stop
+        stop = lambda: deadline_stop() or time.monotonic() >= deadline  # noqa: E731
     train = RefereeScores(executor, train_evaluator)
     heldout = RefereeScores(executor, heldout_evaluator)
     retune = gfo_retune(executor, train_evaluator, gfo_cfg, seed, stop) if tunes_constants(gfo_cfg) else None
