@@ -12,7 +12,8 @@ are grouped into islands and clusters, and which ones a prompt shows.
   With `size_penalty`, a cluster is drawn by its score less `size_penalty` points per AST node
   of its smallest program, so a slightly better but much bigger program does not crowd the
   readable ones out of the prompts (programs above `max_nodes` are refused before they are
-  evaluated, by the search).
+  evaluated, by the search). Programs above `max_shown_nodes` are kept and can be the best, but
+  a prompt never shows them: it must fit the model's context.
 - Every `reset_every` samples the weaker half of the islands is emptied and each is re-seeded
   with the best program of a randomly chosen surviving island.
 - Programs are identified by a key (`identity`), and a key already evaluated, successfully
@@ -105,10 +106,19 @@ class ProgramDatabase:
     # -- prompts --------------------------------------------------------------------------
 
     def select(self) -> Selection:
-        """Programs of one island for the next prompt, ascending score."""
+        """Programs of one island for the next prompt, ascending score: of those small enough to
+        show (`database.max_shown_nodes`: a hostile or bloated program that scores best would
+        otherwise fill every prompt past the model's context, and end the search); an island
+        with none shows its smallest program."""
         island_id = int(self._select_rng.integers(len(self._islands)))
         island = self._islands[island_id]
-        scores = np.array([score - self.cfg.size_penalty * min(p.nodes for p in cluster) for score, cluster in island.clusters.items()], dtype=float)
+        cap = self.cfg.max_shown_nodes
+        shown = {score: [p for p in cluster if cap is None or p.nodes <= cap] for score, cluster in island.clusters.items()}
+        shown = {score: cluster for score, cluster in shown.items() if cluster}
+        if not shown:
+            smallest = min((p for cluster in island.clusters.values() for p in cluster), key=lambda p: p.nodes)
+            return Selection(island_id, [smallest])
+        scores = np.array([score - self.cfg.size_penalty * min(p.nodes for p in cluster) for score, cluster in shown.items()], dtype=float)
         temperature = self.cluster_temperature(island_id)
         # Clusters are drawn without replacement (FunSearch draws with replacement), so a prompt
         # never shows the same structure twice.
@@ -117,7 +127,7 @@ class ProgramDatabase:
         for _ in range(min(len(scores), self.cfg.functions_per_prompt)):
             probabilities = _softmax(scores[remaining] / temperature)
             chosen.append(remaining.pop(self._select_rng.choice(len(remaining), p=probabilities)))
-        clusters = list(island.clusters.values())
+        clusters = list(shown.values())
         programs = [self._pick_in_cluster(island, clusters[i]) for i in chosen]
         return Selection(island_id, sorted(programs, key=lambda program: program.score))
 

@@ -70,6 +70,20 @@ def test_selection_shows_fewer_programs_when_the_island_has_fewer_clusters():
     assert len(selection.programs) == 2 and selection.programs[0].key == "starter"
 
 
+def test_a_program_too_big_to_show_counts_but_is_never_shown():
+    """A hostile or bloated program that scores best would fill every prompt past the model's
+    context (a llama.cpp run then ends: 'prompt longer than the context')."""
+    db = database(functions_per_prompt=2, max_shown_nodes=50, cluster_temperature_init=100.0)
+    db.register(program("big", 900.0, lines=40))  # its own cluster, the best score
+    db.register(program("small", 1.0))
+    db.register(program("big-twin", 1.0, lines=40))  # shares small's cluster: small is shown for it
+    assert db.best.key == "big"
+    shown = {p.key for _ in range(200) for p in db.select().programs}
+    assert shown == {"starter", "small"}
+    alone = ProgramDatabase(DatabaseConfig(num_islands=1, reset_every=0, max_shown_nodes=1), STARTER, 0)  # nothing fits
+    assert [p.key for p in alone.select().programs] == ["starter"]  # the island's smallest
+
+
 def test_higher_scoring_clusters_are_sampled_more_often():
     db = database(functions_per_prompt=1, cluster_temperature_init=1.0, cluster_temperature_period=10**9)
     db.register(program("one", 1.0))

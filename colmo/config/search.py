@@ -22,12 +22,17 @@ class DatabaseConfig:
     length_temperature: float = option(1.0, "within a cluster, shorter programs are preferred")
     size_penalty: float = option(0.0, "clusters are drawn by score minus this many points per AST node of their smallest program")
     max_nodes: Optional[int] = option(None, "programs bigger than this many AST nodes are refused before they are evaluated; null: no cap")
+    max_shown_nodes: Optional[int] = option(
+        1000, "programs bigger than this many AST nodes are never shown in a prompt, though they count and can be the best "
+        "(the prompt must fit the model's context: a policy of a few hundred nodes is typical); null: no cap",
+    )
 
     def __post_init__(self) -> None:
         at_least(self, "database", num_islands=1, functions_per_prompt=1, cluster_temperature_period=1, size_penalty=0)
         require(self.reset_every >= 0, f"database.reset_every must be >= 0 (0 = never), got {self.reset_every}")
         above(self, "database", cluster_temperature_init=0, length_temperature=0)
         require(self.max_nodes is None or self.max_nodes >= 1, f"database.max_nodes must be >= 1, got {self.max_nodes}")
+        require(self.max_shown_nodes is None or self.max_shown_nodes >= 1, f"database.max_shown_nodes must be >= 1, got {self.max_shown_nodes}")
 
 
 
