@@ -28,7 +28,6 @@ by its id (`sweep_id`).
 
 from __future__ import annotations
 
-import hashlib
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,12 +40,6 @@ from colmo.comparison import difference, mean_std
 from colmo.errors import EXIT_RUNTIME
 from colmo.record import summary_failure
 from colmo.store import read_summary
-
-
-def sweep_id(sweep_dir: Path) -> str:
-    """The id of the sweep writing into `sweep_dir` (absolute): the MLflow tag `colmo.sweep` of
-    its parent run, and a name `colmo-report sweep=` accepts."""
-    return hashlib.sha1(str(sweep_dir).encode()).hexdigest()[:16]
 
 
 @dataclass(frozen=True)
@@ -105,6 +98,7 @@ def comparison_lines(sweep_dir: Path, jobs: list[JobOutcome], shown_dir: Optiona
     lines += variant_lines(jobs, variants)
     tracked = [job for job in jobs if job.tracking is not None]
     if tracked:
+        from colmo.track.sweep import sweep_id  # MLflow only for a tracked sweep
         names = list(dict.fromkeys(job.tracking.get("experiment") or job.task for job in tracked))
         experiments = names[0] if len(names) == 1 else f"[{','.join(names)}]"  # a Hydra list: a,b would be a sweep
         uri = tracked[0].tracking.get("tracking_uri")
@@ -151,7 +145,8 @@ def variant_lines(jobs: list[JobOutcome], variants: list[str]) -> list[str]:
 
 
 class CompareJobs(Callback):
-    """Prints `comparison_lines` of a sweep once all its jobs have ended; a sweep with a failed
+    """Prints `comparison_lines` of a sweep once all its jobs have ended, and for a tracked sweep
+    records them in its MLflow parent run (`colmo.track.sweep.record_comparison`); a sweep with a failed
     job then ends with `failure_line` and exit code 1 (Hydra notifies callbacks of a sweep's end
     last one first, so this one, declared first in colmo/conf/search.yaml, comes after a user's)."""
 
@@ -159,7 +154,15 @@ class CompareJobs(Callback):
         shown = Path(config.hydra.sweep.dir)
         sweep_dir = (Path(config.hydra.runtime.cwd) / shown).resolve()
         jobs = read_jobs(sweep_dir)
-        print("\n".join(comparison_lines(sweep_dir, jobs, shown)), flush=True)
+        lines = comparison_lines(sweep_dir, jobs, shown)
+        print("\n".join(lines), flush=True)
+        tracked = [job for job in jobs if job.tracking is not None]
+        if tracked:
+            from colmo.track.sweep import record_comparison
+
+            uri = tracked[0].tracking.get("tracking_uri") or None
+            experiments = sorted({job.tracking.get("experiment") or job.task for job in tracked})
+            record_comparison(uri, Path(config.hydra.runtime.cwd), experiments, sweep_dir, lines)
         failed = failure_line(jobs)
         if failed is not None:
             print(failed, file=sys.stderr, flush=True)

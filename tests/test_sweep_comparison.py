@@ -38,6 +38,8 @@ def test_a_sweep_ends_with_one_line_per_job_and_the_command_of_its_report(tmp_pa
     assert [parent.data.tags["colmo.sweep"] for parent in parents] == [report.rsplit("sweep=", 1)[1]]
     children = [run for run in client.search_runs([experiment]) if "colmo.sweep" not in run.data.tags]
     assert [child.data.tags["colmo.stop_reason"] for child in children] == ["max_samples"] * 2  # which limit each reached
+    recorded = Path(client.download_artifacts(parents[0].info.run_id, "comparison.txt", str(tmp_path)))
+    assert recorded.read_text().splitlines() == lines[start: start + 5]  # the table the sweep printed, in its parent run
     # An unrelated run beside the sweep: the printed command still compares exactly its 2 jobs.
     assert run_colmo("colmo", *TINY, "seed=2", cwd=tmp_path, timeout=600).returncode == 0
     out = tmp_path / "report"
@@ -104,3 +106,22 @@ def test_settings_compared_over_seeds_get_their_mean_and_the_difference_with_its
              for n, (gfo, score) in enumerate((("gfo=none", 201.3), ("gfo=none", 180.0), ("gfo=oneplusone", 222.8), ("gfo=oneplusone", 190.0)))]
     assert comparison_lines(Path("/runs/sweep"), close)[-1].endswith(": no significant difference")
     assert not any("by setting" in line for line in comparison_lines(Path("/runs/sweep"), jobs[:3]))  # seeds only: nothing to compare
+
+
+def test_the_comparison_of_settings_goes_into_the_sweeps_parent_run(tmp_path):
+    from colmo.track import open_experiment
+    from colmo.track.sweep import record_comparison, sweep_id
+
+    uri = f"sqlite:///{tmp_path / 'mlruns.db'}"
+    client, experiment_id = open_experiment(uri, "pendulum")
+    parent = client.create_run(experiment_id, tags={"colmo.sweep": sweep_id(tmp_path / "sweep")}).info.run_id
+    other = client.create_run(experiment_id, tags={"colmo.sweep": sweep_id(tmp_path / "other")}).info.run_id
+    lines = ["sweep sweep: 6 jobs", "  job  variant  best", "  best score by setting, mean ± std over seeds (each seed), difference to the first:",
+             "    gfo=none        325.07 ± 73.40 (380.40, 241.80, 353.00)",
+             "    gfo=oneplusone  392.97 ± 111.01 (350.70, 518.90, 309.30)  +67.90, 95% interval [-43.70, +193.83]: no significant difference",
+             "report: colmo-report experiment=pendulum sweep=abc"]
+    record_comparison(uri, tmp_path, ["pendulum"], tmp_path / "sweep", lines)
+    tag = client.get_run(parent).data.tags["colmo.comparison"]
+    assert tag.splitlines()[2].endswith("+67.90, 95% interval [-43.70, +193.83]: no significant difference") and "report:" not in tag
+    assert Path(client.download_artifacts(parent, "comparison.txt", str(tmp_path))).read_text() == "\n".join(lines) + "\n"
+    assert "colmo.comparison" not in client.get_run(other).data.tags  # another sweep's parent is left alone

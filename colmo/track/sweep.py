@@ -8,21 +8,31 @@ any launcher (basic, joblib, submitit) and any tracking store. The parent holds 
 overrides (from Hydra's `multirun.yaml`) and, after each job, the best `best_score` and
 `best_heldout_score` over its children and their count (`runs`); its status is RUNNING while a
 child runs, else FAILED or KILLED if a child did, else FINISHED (between two jobs of the basic
-launcher it is briefly FINISHED).
+launcher it is briefly FINISHED). At the sweep's end it receives the comparison the sweep
+printed (`record_comparison`): `comparison.txt`, and each setting's mean and difference with its
+interval as the tag `colmo.comparison`.
 """
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
+from typing import Optional
 
 from mlflow import MlflowClient
 from mlflow.utils.mlflow_tags import MLFLOW_PARENT_RUN_ID
+from mlflow.utils.validation import MAX_TAG_VAL_LENGTH
 
-from colmo.sweep_comparison import sweep_id
-from colmo.track.backend import FAILED, FINISHED, KILLED, RUNNING, file_lock, log_metrics, retry_locked
+from colmo.track.backend import FAILED, FINISHED, KILLED, RUNNING, connect, default_tracking_uri, file_lock, log_metrics, retry_locked
 
 SWEEP_TAG = "colmo.sweep"
 SWEEP_LOCK = ".mlflow_parent.lock"
+
+
+def sweep_id(sweep_dir: Path) -> str:
+    """The id of the sweep writing into `sweep_dir` (absolute): the MLflow tag `colmo.sweep` of
+    its parent run, and a name `colmo-report sweep=` accepts."""
+    return hashlib.sha1(str(sweep_dir).encode()).hexdigest()[:16]
 
 
 def sweep_parent(client: MlflowClient, experiment_id: str, sweep_dir: Path, name: str, tags: dict[str, str]) -> str:
@@ -61,3 +71,23 @@ def update_parent(client: MlflowClient, experiment_id: str, parent_id: str, swee
             return
         status = FAILED if FAILED in statuses else KILLED if KILLED in statuses else FINISHED
         retry_locked(client.set_terminated, parent_id, status)
+
+
+COMPARISON_FILE = "comparison.txt"
+COMPARISON_TAG = "colmo.comparison"
+
+
+def record_comparison(uri: Optional[str], launch_dir: Path, experiments: list[str], sweep_dir: Path, lines: list[str]) -> None:
+    """The end-of-sweep comparison (`colmo.sweep_comparison.comparison_lines`) in the sweep's
+    parent run in each of `experiments`: the whole text as `comparison.txt`, and its lines of
+    settings compared (each one's mean over seeds, its difference to the first with the interval)
+    as the tag `colmo.comparison`, which the run list can show, so that one page tells the winner."""
+    client = connect(uri or default_tracking_uri(launch_dir))
+    ids = [experiment.experiment_id for name in experiments if (experiment := client.get_experiment_by_name(name)) is not None]
+    parents = retry_locked(client.search_runs, ids, f"tags.`{SWEEP_TAG}` = '{sweep_id(sweep_dir)}'") if ids else []
+    start = next((i for i, line in enumerate(lines) if line.strip().startswith("best score by setting")), None)
+    settings = "\n".join(line.strip() for line in lines[start:] if not line.startswith("report:")) if start is not None else ""
+    for parent in parents:
+        client.log_text(parent.info.run_id, "\n".join(lines) + "\n", COMPARISON_FILE)
+        if settings:
+            retry_locked(client.set_tag, parent.info.run_id, COMPARISON_TAG, settings[:MAX_TAG_VAL_LENGTH])
