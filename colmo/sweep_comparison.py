@@ -37,7 +37,7 @@ from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
 from colmo.comparison import difference, mean_std
-from colmo.errors import EXIT_RUNTIME
+from colmo.errors import EXIT_RUNTIME, one_line
 from colmo.record import summary_failure
 from colmo.store import read_summary
 
@@ -162,7 +162,10 @@ class CompareJobs(Callback):
 
             uri = tracked[0].tracking.get("tracking_uri") or None
             experiments = sorted({job.tracking.get("experiment") or job.task for job in tracked})
-            record_comparison(uri, Path(config.hydra.runtime.cwd), experiments, sweep_dir, lines)
+            try:
+                record_comparison(uri, Path(config.hydra.runtime.cwd), experiments, sweep_dir, lines)
+            except Exception as error:  # MLflow's errors are many; the table is printed and the exit code must follow
+                print(f"colmo: the comparison was not recorded in MLflow: {one_line(error)}", file=sys.stderr, flush=True)
         failed = failure_line(jobs)
         if failed is not None:
             print(failed, file=sys.stderr, flush=True)

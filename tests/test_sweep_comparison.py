@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from conftest import run_colmo
 from mlflow import MlflowClient
 
@@ -125,3 +126,23 @@ def test_the_comparison_of_settings_goes_into_the_sweeps_parent_run(tmp_path):
     assert tag.splitlines()[2].endswith("+67.90, 95% interval [-43.70, +193.83]: no significant difference") and "report:" not in tag
     assert Path(client.download_artifacts(parent, "comparison.txt", str(tmp_path))).read_text() == "\n".join(lines) + "\n"
     assert "colmo.comparison" not in client.get_run(other).data.tags  # another sweep's parent is left alone
+
+
+def test_a_comparison_mlflow_cannot_record_still_ends_the_sweep_with_its_exit_code(tmp_path, monkeypatch, capsys):
+    from omegaconf import OmegaConf
+
+    from colmo import sweep_comparison
+    from colmo.track import sweep as tracked_sweep
+
+    failed = JobOutcome(0, ("seed=0",), summary(programs_evaluated=0), {"name": "mlflow", "tracking_uri": "http://127.0.0.1:9"}, "pendulum")
+    monkeypatch.setattr(sweep_comparison, "read_jobs", lambda sweep_dir: [failed])
+    def server_gone(*args):
+        raise ConnectionError("server gone")
+
+    monkeypatch.setattr(tracked_sweep, "record_comparison", server_gone)
+    config = OmegaConf.create({"hydra": {"sweep": {"dir": "sweep"}, "runtime": {"cwd": str(tmp_path)}}})
+    with pytest.raises(SystemExit) as stop:
+        sweep_comparison.CompareJobs().on_multirun_end(config)
+    assert stop.value.code == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err == ["colmo: the comparison was not recorded in MLflow: server gone", "colmo: error: 1 of 1 jobs failed (job 0): no result to compare"]
