@@ -58,16 +58,19 @@ class TimeBudget:
     enough for the finish and the drain of the `programs_in_flight()` at the workers' current speed."""
 
     def __init__(
-        self, max_seconds: float, programs_in_flight: Callable[[], int] = lambda: 0, elapsed: float = 0.0, tuned: bool = True,
+        self, max_seconds: float, programs_in_flight: Callable[[], int] = lambda: 0, started: Optional[float] = None, tuned: bool = True,
     ):
-        """`elapsed`: seconds of the limit already spent before now (the job's start-up);
+        """`started`: when the limit began (`time.perf_counter()`: the job's start, `job_start`; default: now);
         `tuned`: whether programs are tuned (their final scores are then a fast-path and a
         referee evaluation, not the referee's alone)."""
         self.max_seconds = max_seconds
         self.tuned = tuned
         self.programs_in_flight = programs_in_flight  # programs being tuned now (the search's program threads)
         self.start = time.perf_counter()
-        self.end = self.start - elapsed + max_seconds if max_seconds else math.inf
+        self._job_start = self.start if started is None else started
+        self.end = self._job_start + max_seconds if max_seconds else math.inf
+        self._searching: Optional[float] = None  # when the first batch began (`search_starts`)
+        self._stopped: Optional[float] = None  # when the search stopped (`search_stops`)
         self._starter_deadline = self.start + _STARTER_SHARE * (self.end - self.start)
         self.calibration = RefereeCost(0.0, 0.0)  # the starter's referee cost, from its calibration
         self._calibration_referee = 0.0  # the calibration's referee evaluation, worker seconds
@@ -216,6 +219,21 @@ class TimeBudget:
             self.load_factor = factor
             self._plan_finish()
             log.debug("the workers run %.1fx slower than calibrated: the search stops at %.0f s", factor, self.deadline - self.start)
+
+    def search_starts(self) -> None:
+        """The start-up is over: the first batch begins."""
+        self._searching = time.perf_counter()
+
+    def search_stops(self) -> None:
+        self._stopped = time.perf_counter()
+
+    def phases(self) -> tuple[float, float]:
+        """Seconds of start-up (from the job's start to the first batch, or to the stop of a run
+        that never searched) and of search (from the first batch to the stop)."""
+        stopped = self._stopped or time.perf_counter()
+        if self._searching is None:
+            return stopped - self._job_start, 0.0
+        return self._searching - self._job_start, stopped - self._searching
 
     def finish_by(self) -> float:
         """When the work on the best programs must end (`time.monotonic()`): with a time limit,

@@ -90,15 +90,13 @@ class _Batch:
 
 
 class Search:
-    """One search run into `run_dir` (or the run `cfg.resume` names). `executor` and
-    `generator` are built from the config unless given (a test, a notebook, a benchmark).
-    `started`: when the run's time limit began (`time.perf_counter()`; default: now)."""
+    """One search run into `run_dir` (or the run `cfg.resume` names). `executor` and `generator` are built from the config
+    unless given (a test, a notebook, a benchmark); `started`: when the run's time limit began (default: now)."""
 
     def __init__(
         self, cfg: SearchConfig, run_dir: Path, observers: tuple[SearchObserver, ...] = (),
         executor: Optional[Executor] = None, generator: Optional[Generator] = None, started: Optional[float] = None,
     ):
-        self.started = time.perf_counter() if started is None else started
         self.cfg = cfg
         self.observers = observers
         self.spec: Spec = load_task_spec(cfg.task.spec)
@@ -120,10 +118,7 @@ class Search:
             cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop,
             observe=lambda result: self.budget.observe(result),
         )
-        self.budget = TimeBudget(
-            cfg.search.max_seconds, self.outcomes.running, elapsed=time.perf_counter() - self.started, tuned=tunes_constants(cfg.gfo),
-        )
-        self.startup_seconds = self.search_seconds = 0.0  # from `started` to the first batch; from there to the search's stop
+        self.budget = TimeBudget(cfg.search.max_seconds, self.outcomes.running, started=started, tuned=tunes_constants(cfg.gfo))
         self.generation_thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
         self.evaluator: Optional[Evaluator] = None
         self.database: Optional[ProgramDatabase] = None
@@ -136,7 +131,6 @@ class Search:
 
     def _run(self) -> Summary:
         try:
-            searching_since: Optional[float] = None
             try:
                 if not self._wants_probe():  # a generator that cannot start ends the run before any work
                     self._start_generator()
@@ -146,8 +140,7 @@ class Search:
                 self.best_so_far = [(0, self.database.best.score)]
                 to_evaluate = self._replay()
                 self._start_generator()
-                searching_since = time.perf_counter()
-                self.startup_seconds = searching_since - self.started
+                self.budget.search_starts()
                 self._loop(to_evaluate)
             except (KeyboardInterrupt, ExecutorClosed):  # a signal before the handlers were in place, or a second one
                 self.stop_reason = self.stop_reason or "interrupted"
@@ -156,10 +149,7 @@ class Search:
                 log.error("%s", self.stop_reason)
             finally:
                 self._stop_programs()
-                if searching_since is None:  # a run that never searched spent its time starting
-                    self.startup_seconds = time.perf_counter() - self.started
-                else:
-                    self.search_seconds = time.perf_counter() - searching_since
+                self.budget.search_stops()
             best = BestPrograms()
             if self.database is not None and self.stop_reason in FINISHED:  # a stopped run finishes when resumed
                 best = finish(
@@ -167,10 +157,7 @@ class Search:
                     until=self.budget.finish_by(), referee=self.budget.finish_referee_cost,
                 )
             best_program = self.database.best if self.database else None
-            summary = best.summary(
-                self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals(),
-                self.startup_seconds, self.search_seconds,
-            )
+            summary = best.summary(self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals(), *self.budget.phases())
             write_outputs(summary, self.run_dir)
             for observer in self.observers:
                 observer.on_finish(summary)

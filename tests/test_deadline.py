@@ -98,8 +98,8 @@ def test_a_sweep_job_counts_its_limit_from_its_own_start_a_single_run_from_the_p
     before = time.perf_counter()
     assert before <= job_start(sweep_job=True) <= time.perf_counter()
     assert job_start(sweep_job=False) <= before - process_seconds() + 1e-3
-    budget = TimeBudget(60.0, elapsed=20.0)
-    assert budget.limit_seconds == pytest.approx(40.0)  # the start-up spent is not the search's
+    budget = TimeBudget(60.0, started=time.perf_counter() - 20.0)
+    assert budget.limit_seconds == pytest.approx(40.0, abs=0.5)  # the start-up spent is not the search's
     assert TimeBudget(60.0).limit_seconds == pytest.approx(60.0)
 
 
@@ -122,7 +122,7 @@ class IdleWorkers:
 
 def planned_budget(max_seconds: float, programs: list[int], calibration: float = 2.0) -> TimeBudget:
     """A budget planned at its start, its programs in flight read from `programs[0]`."""
-    budget = TimeBudget(max_seconds, lambda: programs[0], elapsed=0.0)
+    budget = TimeBudget(max_seconds, lambda: programs[0])
     cfg = compose("search", "task=pendulum", f"search.max_seconds={max_seconds}", "evaluation.render=false", "evaluation.simplify=false")
     budget.plan(cfg, (calibration / 2, calibration / 2), program_seconds=1.0, executor=IdleWorkers())
     return budget
