@@ -149,7 +149,7 @@ def test_a_spec_whose_environment_fails_is_one_line_with_the_default_tracker(tmp
     (tmp_path / "broken.py").write_text(SPEC_ENV_RAISES)
     result = script("colmo", f"task.spec={tmp_path / 'broken.py'}", *TINY, "hydra.run.dir=run", cwd=tmp_path)
     line = one_error_line(result, 2)
-    assert "the starter policy in" in line and "no such robot" in line, line
+    assert "the starter policy in" in line and "building broken.py's environment: RuntimeError: no such robot" in line, line
     # The tracker built nothing of the task; its run records the failure.
     client = MlflowClient(f"sqlite:///{tmp_path / 'mlruns.db'}")
     (run,) = client.search_runs([client.get_experiment_by_name("pendulum").experiment_id])

@@ -14,6 +14,7 @@ import re
 import mujoco_menagerie
 import numpy as np
 import pytest
+from conftest import last_json_line, run_colmo
 
 from colmo.environments.ball_in_cup import BallInCup
 from colmo.environments.cheetah import Cheetah
@@ -151,6 +152,35 @@ def test_starter_policy_scores_deterministically(task):
     assert first == again == fresh
 
 
+def test_a_replayed_reset_is_the_first_reset(task):
+    # A seed's second reset restores the state the first one kept: the same episode follows.
+    _, env = task
+    actions = np.random.default_rng(0).uniform(-1, 1, (100, env.action_size))
+
+    def episode(seed: int) -> np.ndarray:
+        observations = [env.reset(seed)] + [env.step(action)[1] for action in actions]
+        return np.concatenate(observations)
+
+    first = episode(7)
+    episode(8)
+    assert np.array_equal(episode(7), first)
+
+
+def resident_bytes() -> int:
+    with open("/proc/self/statm") as statm:
+        return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+def test_the_initial_states_a_task_keeps_are_small(task):
+    # Each seed's initial state is kept for the next candidate; held-out scoring resets one
+    # environment with hundreds of seeds, so what it keeps must not be a whole MjData (~25 MB).
+    _, env = task
+    before = resident_bytes()
+    for seed in range(1000):
+        env.reset(seed)
+    assert resident_bytes() - before < 100 * 2**20
+
+
 def raises(obs):
     raise ZeroDivisionError("boom")
 
@@ -185,3 +215,12 @@ def test_a1_start_and_reward():
     for _ in range(200):
         reward, obs = env.step(home + rng.normal(0, 0.3, 12))
         assert reward == min(max(-obs[24] / 10, 0.0), 1.0)
+
+
+def test_colmo_evaluate_scores_the_papers_1000_held_out_episodes(tmp_path, examples):
+    # The paper scores the pendulum over 1000 episodes; a worker resets hundreds of seeds for it.
+    run = run_colmo("colmo.heldout", "task=pendulum", f"policy_file={examples / 'paper_pendulum.py'}", "episodes=1000", cwd=tmp_path, timeout=900)
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    result = last_json_line(run.stdout)
+    assert result["failure"] is None and len(result["returns"]) == 1000
+    assert result["score"] == pytest.approx(np.mean(result["returns"]), abs=1e-3)

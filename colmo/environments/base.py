@@ -11,7 +11,6 @@ rollout (`colmo.rollout`) and an environment's episode check raise; its message 
 from __future__ import annotations
 
 import abc
-import copy
 
 import mujoco
 import numpy as np
@@ -23,7 +22,10 @@ _INSTABILITY_WARNINGS = (
 )
 
 
-_MAX_CACHED_RESETS = 1024
+# What a reset keeps per seed: the state `mj_step` integrates (a few hundred floats), not a copy
+# of `MjData`, whose arena is tens of megabytes; the cap bounds a long run's memory.
+_INITIAL_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
+_MAX_CACHED_RESETS = 100_000
 
 
 class PolicyFailure(Exception):
@@ -69,7 +71,7 @@ class MujocoEnvironment(Environment):
         self.action_size = model.nu
         self.control_timestep = n_sub_steps * model.opt.timestep
         # Every candidate replays the same episode seeds: keep each seed's initial state.
-        self._initial_states: dict[int, mujoco.MjData] = {}
+        self._initial_states: dict[int, np.ndarray] = {}
 
     @abc.abstractmethod
     def initialize_episode(self, random: np.random.RandomState) -> None:
@@ -93,15 +95,18 @@ class MujocoEnvironment(Environment):
 
     def reset(self, seed: int) -> np.ndarray:
         initial = self._initial_states.get(seed)
+        mujoco.mj_resetData(self.model, self.data)
         if initial is None:
-            mujoco.mj_resetData(self.model, self.data)
             self.forward_unactuated()
             self.initialize_episode(np.random.RandomState(seed))
-            self.forward_unactuated()
             if len(self._initial_states) < _MAX_CACHED_RESETS:
-                self._initial_states[seed] = copy.copy(self.data)
+                initial = np.empty(mujoco.mj_stateSize(self.model, _INITIAL_STATE))
+                mujoco.mj_getState(self.model, self.data, initial, _INITIAL_STATE)
+                self._initial_states[seed] = initial
         else:
-            mujoco.mj_copyData(self.data, self.model, initial)
+            mujoco.mj_setState(self.model, self.data, initial, _INITIAL_STATE)
+        # Everything else follows from the integrated state, so a restored reset is the first one.
+        self.forward_unactuated()
         return self.observation()
 
     def step(self, action: np.ndarray) -> tuple[float, np.ndarray]:

@@ -65,6 +65,10 @@ _CHILD_EXITS = {
 KEPT_TASKS = 4
 
 
+class EnvironmentFailure(Exception):
+    """The task's simulator, not the program, failed; the message says at which step."""
+
+
 class Worker:
     """What a worker keeps between requests: simulators by (spec, options), for the `KEPT_TASKS`
     tasks used last."""
@@ -81,24 +85,37 @@ class Worker:
         while len(self.environments) > KEPT_TASKS:
             self.environments.popitem(last=False)
         count = min(max(len(request.seeds), 1), LOCKSTEP) if request.mode == REFEREE else 1
+        spec_name = os.path.basename(request.spec)
         if len(envs) < count:
             from colmo.specs import load_spec
 
-            spec = load_spec(request.spec)
-            envs.extend(spec.make_environment(**dict(request.env)) for _ in range(count - len(envs)))
+            try:
+                spec = load_spec(request.spec)
+                envs.extend(spec.make_environment(**dict(request.env)) for _ in range(count - len(envs)))
+            except Exception as error:
+                raise EnvironmentFailure(f"building {spec_name}'s environment: {type(error).__name__}: {error}") from error
         envs = envs[:count]
         # Initial states, computed once here and inherited by every child (fast) or reused (referee).
         for index, seed in enumerate(request.seeds):
-            envs[index % len(envs)].reset(seed)
+            try:
+                envs[index % len(envs)].reset(seed)
+            except Exception as error:
+                raise EnvironmentFailure(
+                    f"resetting {spec_name}'s environment to episode seed {seed} ({index + 1} of {len(request.seeds)}): {type(error).__name__}: {error}"
+                ) from error
         return envs
 
     def evaluate(self, request: EvalRequest) -> Evaluation:
+        # The spec and its imports are the user's, not the program's: say which step failed.
         try:
             envs = self.environments_for(request)
+        except EnvironmentFailure as error:
+            return Evaluation(failure=f"environment: {error}")
+        try:
             for name in request.allowed_imports:
                 template(name)
-        except Exception as error:  # the spec is the user's, not the program's: say so
-            return Evaluation(failure=f"environment: {type(error).__name__}: {error}")
+        except Exception as error:
+            return Evaluation(failure=f"environment: importing the spec's allowed modules: {type(error).__name__}: {error}")
         # What exists now is shared with every child: keep their collections from touching it.
         gc.freeze()
         start = time.monotonic()
