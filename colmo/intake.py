@@ -14,12 +14,13 @@ undecodable byte became) is `Unusable` too, before anything parses it.
 
 from __future__ import annotations
 
+import ast
 import re
 import textwrap
 from pathlib import Path
 from typing import Optional, Sequence
 
-from colmo.astutil import node_count, unbound_names
+from colmo.astutil import node_count, parse, unbound_names
 from colmo.errors import ConfigError
 from colmo.extract import ExtractionError, extract_policy, first_syntax_error
 from colmo.program import ParametricProgram, ProgramError, instantiate, measure, parametrize
@@ -103,32 +104,47 @@ def read_policy_file(path: str, allowed_imports: Sequence[str]) -> ParametricPro
         text = file.read_text(errors="replace")
     except OSError as error:
         raise ConfigError(f"cannot read policy_file {path}: {error.strerror}") from None
+    if text.lstrip("\n")[:1].isspace():
+        # A raw completion body, indented from its first line: what a completion model wrote after
+        # the prompt's `def policy(obs):` line, read exactly as the search reads it (a trailing,
+        # unfinished next version included).
+        return _read(path, text, allowed_imports, prefix=COMPLETION_SIGNATURE, reading=" (read as a raw completion body)")
     syntax = _syntax_error(text)
     lines = text.splitlines()
-    starts_indented = text.lstrip("\n")[:1].isspace()  # as a raw completion body does
     typo = ConfigError(f"no usable policy in {path}: syntax error at line {syntax[0]}: {syntax[1]}") if syntax else None
     # A typo inside a block of a `.py` file is the user's to fix: extraction would cut the
     # definition before it (the rule for a truncated answer) and run a broken policy. Prose,
-    # the other thing that fails to parse in a saved answer, is not indented; a raw completion
-    # body is indented from its first line.
-    if syntax and lines[syntax[0] - 1 : syntax[0]] and lines[syntax[0] - 1][:1].isspace() and not starts_indented:
+    # the other thing that fails to parse in a saved answer, is not indented.
+    if syntax and lines[syntax[0] - 1 : syntax[0]] and lines[syntax[0] - 1][:1].isspace():
         raise typo
     try:
-        return read_program(text, allowed_imports)
-    except ForbiddenProgram as error:
-        raise ConfigError(f"no usable policy in {path}: {error}") from None
-    except Unusable as error:
-        unusable = error
-    if str(unusable).startswith("no function named"):
-        # A raw completion body: the docstring and body a model wrote after the `def` line.
-        body = text if starts_indented else textwrap.indent(text, "    ")
-        try:
-            return read_program(body, allowed_imports, prefix=COMPLETION_SIGNATURE)
-        except (Unusable, ForbiddenProgram):
-            pass
-    if typo and "no complete top-level definition" in str(unusable):  # a typo in the signature
-        raise typo
-    raise ConfigError(f"no usable policy in {path}: {unusable}")
+        return _read(path, text, allowed_imports)
+    except ConfigError as error:
+        if typo and "no complete top-level definition" in str(error):  # a typo in the signature
+            raise typo from None
+        if "no function named" not in str(error):
+            raise
+        functions = _top_level_functions(text)
+        if functions:
+            raise ConfigError(f"{error} (it defines {', '.join(functions)}; a policy file's function is `def policy(obs)`)") from None
+    # Statements without a `def` line: a completion body saved without its indentation.
+    return _read(path, textwrap.indent(text, "    "), allowed_imports, prefix=COMPLETION_SIGNATURE, reading=" (read as a raw completion body)")
+
+
+def _read(path: str, text: str, allowed_imports: Sequence[str], prefix: str = "", reading: str = "") -> ParametricProgram:
+    """`read_program`, its refusal one `ConfigError` naming the file."""
+    try:
+        return read_program(text, allowed_imports, prefix=prefix)
+    except (Unusable, ForbiddenProgram) as error:
+        raise ConfigError(f"no usable policy in {path}{reading}: {error}") from None
+
+
+def _top_level_functions(text: str) -> list[str]:
+    """The functions the top level of `text` defines, if it is Python."""
+    try:
+        return [statement.name for statement in parse(text).body if isinstance(statement, ast.FunctionDef)]
+    except SyntaxError:
+        return []
 
 
 def _syntax_error(text: str) -> tuple[int, str] | None:

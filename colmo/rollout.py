@@ -56,6 +56,8 @@ def as_action(raw: object, action_size: int) -> np.ndarray:
         # A finite sum means finite values; finite values whose sum overflows take the general path.
         if math.isfinite(sum(action.tolist())):
             return action
+    if raw is None:
+        raise PolicyFailure("bad action: the policy returned None (it reached no return statement)")
     try:
         array = np.asarray(raw)
         if array.dtype.kind == "O":  # a sequence mixing numbers and size-1 arrays, or arbitrary objects

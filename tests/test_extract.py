@@ -578,6 +578,23 @@ def test_a_raw_completion_body_in_a_file_is_read(tmp_path, indent):
     assert program.values == (-8.0, 1.2, -1.0, 1.0) and "def policy(obs):" in program.skeleton
 
 
+def test_a_raw_completion_body_with_an_unfinished_next_version_reads_as_the_search_reads_it(tmp_path):
+    # What a completion model writes when no stop sequence cuts it: the body, then the start of
+    # the next version. The search reads it after its prompt; the one-file tools after the signature.
+    body = '    """Damped."""\n    return float(-2.0 * obs[2])\n\n\ndef policy_v3(obs):\n    """Improved version of'
+    file = tmp_path / "completion.txt"
+    file.write_text(body)
+    searched = read_program(body, ["numpy", "math"], prefix="import numpy as np\n\ndef policy_v2(obs):\n")
+    assert read_policy_file(str(file), ["numpy", "math"]).values == searched.values == (-2.0,)
+
+
+def test_a_policy_file_without_a_policy_function_says_so_and_names_what_it_defines(tmp_path):
+    file = tmp_path / "controller.py"
+    file.write_text("import numpy as np\n\ndef controller(obs):\n    return -obs[2]\n")
+    with pytest.raises(ConfigError, match=r"no function named 'policy' \(it defines controller; a policy file's function is `def policy\(obs\)`\)"):
+        read_policy_file(str(file), ["numpy", "math"])
+
+
 @pytest.mark.parametrize("body, undefined", [
     ("    return -theta * 2.0", "`theta` is"),  # a shown version's variable, never defined here
     ("    if obs[0] > 0:\n        return omega\n    return theta", "`omega` and `theta` are"),

@@ -229,6 +229,11 @@ def test_a_non_finite_action_fails(raw, size):
         as_action(raw, size)
 
 
+def test_a_policy_that_returns_nothing_is_told_so():
+    with pytest.raises(PolicyFailure, match=r"the policy returned None \(it reached no return statement\)"):
+        as_action(None, 1)
+
+
 def test_each_instance_draws_from_its_own_generator():
     """An instance's np.random draws what the global generator seeded with its episode's seed
     draws, whatever other instances or the evaluator draw in between (the referee steps
