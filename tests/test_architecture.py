@@ -1,8 +1,8 @@
-"""The structure stays readable: the README's module map stays true (every path it names exists,
+"""The structure stays readable: the module map (docs/concepts.md) stays true (every path it names exists,
 and every module of colmo/ is on it), no module imports itself through others (no import
 cycle), and the config schemas import no component.
 
-The map ("How it works") is how a newcomer finds the module that owns a concept; a rename or a new
+The map ("How colmo works") is how a newcomer finds the module that owns a concept; a rename or a new
 module that the map does not follow makes it lie, so this test fails then. An import cycle
 makes the order of a module's imports matter and hides which concept depends on which; the
 import graph is read from every `import` statement of colmo/ (those inside functions and under
@@ -16,6 +16,7 @@ import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+MAP = ROOT / "docs" / "concepts.md"
 MAP_ROW = re.compile(r"^\| (`colmo/[^|]+)\|")
 PATH = re.compile(r"`(colmo/[\w/.]+)`")
 # Parts of the package that are data or plumbing, not concepts of the method.
@@ -23,8 +24,8 @@ NOT_CONCEPTS = {"colmo/__init__.py", "colmo/__main__.py", "colmo/conf", "colmo/_
 
 
 def map_paths() -> list[str]:
-    """The paths in the first column of the README's module table."""
-    rows = [MAP_ROW.match(line) for line in (ROOT / "README.md").read_text().splitlines()]
+    """The paths in the first column of the module table."""
+    rows = [MAP_ROW.match(line) for line in MAP.read_text().splitlines()]
     return [path.rstrip("/") for row in rows if row for path in PATH.findall(row.group(1))]
 
 
@@ -32,14 +33,14 @@ def test_the_module_map_names_only_modules_that_exist() -> None:
     paths = map_paths()
     assert len(paths) >= 20, paths
     missing = [path for path in paths if not (ROOT / path).exists()]
-    assert not missing, f"the README's module map names paths that do not exist: {missing}"
+    assert not missing, f"the module map names paths that do not exist: {missing}"
 
 
 def test_every_module_of_colmo_is_on_the_map() -> None:
     named = set(map_paths())
     present = {f"colmo/{entry.name}" for entry in (ROOT / "colmo").iterdir()} - NOT_CONCEPTS
     unmapped = sorted(present - named)
-    assert not unmapped, f"modules missing from the README's module map: {unmapped}"
+    assert not unmapped, f"modules missing from the module map (docs/concepts.md): {unmapped}"
 
 
 def module_files() -> dict[str, Path]:

@@ -1,6 +1,6 @@
 """Bad input to `python -m colmo`: one clear line naming the problem and the fix, exit code 2.
 
-The README's bad-input table is this test's cases and the messages they print. They are checked
+The bad-input table of docs/security.md is this test's cases and the messages they print. They are checked
 in process (`colmo.cli.App.check_command_line`), what the command prints and exits with in
 tests/test_cli.py.
 """
