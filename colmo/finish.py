@@ -164,7 +164,7 @@ class BestPrograms:
 
     def summary(
         self, task: str, best: Optional["StoredProgram"], best_so_far: Sequence[tuple[int, float]], stop_reason: str, run_dir: Path, totals: Totals,
-        startup_seconds: float = 0.0, search_seconds: float = 0.0,
+        startup_seconds: float = 0.0, search_seconds: float = 0.0, by_generator: Optional[dict] = None,
     ) -> Summary:
         """A search's summary: its `best` program (None if it has none), with its held-out score
         where it got one, and these results."""
@@ -173,7 +173,7 @@ class BestPrograms:
             task=task, best_score=best.score if best else None, best_heldout_score=best_heldout, best_key=best.key if best else None,
             best_code=best.code if best else None, best_so_far=tuple(best_so_far), stop_reason=stop_reason, run_dir=str(run_dir),
             heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, robustness=self.robustness,
-            startup_seconds=startup_seconds, search_seconds=search_seconds, **asdict(totals),
+            startup_seconds=startup_seconds, search_seconds=search_seconds, by_generator=by_generator or {}, **asdict(totals),
         )
 
 

@@ -17,7 +17,7 @@ import collections
 import math
 import time
 from dataclasses import asdict, astuple, dataclass, field, replace
-from typing import TYPE_CHECKING, Any, Mapping, Optional, Protocol
+from typing import TYPE_CHECKING, Any, Iterable, Mapping, Optional, Protocol
 
 from colmo.generate.base import Generation
 
@@ -186,6 +186,9 @@ class Summary(Totals):
     # then the search's own seconds, from its first batch to its stop (the finish follows).
     startup_seconds: float = 0.0
     search_seconds: float = 0.0
+    # Per generator (`mutate`, `llamacpp`, ...: a generator label up to its first colon; the
+    # spec's starter aside): model calls, programs evaluated and the best training score.
+    by_generator: dict = field(default_factory=dict)
 
     @property
     def failure(self) -> Optional[str]:
@@ -200,6 +203,21 @@ class Summary(Totals):
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
+
+
+def by_generator(records: Iterable[SampleRecord]) -> dict[str, dict[str, Any]]:
+    """What each generator of a search contributed (`Summary.by_generator`), by generator name."""
+    split: dict[str, dict[str, Any]] = {}
+    for record in records:
+        name = record.generator.split(":", 1)[0]
+        if name == "spec":
+            continue
+        entry = split.setdefault(name, {"samples": 0, "programs_evaluated": 0, "best_score": None})
+        entry["samples"] += record.model_calls
+        if record.status == EVALUATED:
+            entry["programs_evaluated"] += 1
+            entry["best_score"] = record.score if entry["best_score"] is None else max(entry["best_score"], record.score)
+    return split
 
 
 def shortfall(stop_reason: str, samples: int, programs_evaluated: int) -> Optional[str]:

@@ -17,6 +17,12 @@ again up to `search.duplicate_retries` times (`colmo.answers`: a chat model is t
 copied, or why its answer cannot be used); `max_samples` and the counters count model calls,
 the regenerations included, so that samples mean model calls.
 
+With `search.fill=mutate` the workers do not wait for a slow model: while its call is in flight,
+the batches that are in are integrated and the embedded mutation generator (the filler) gives
+idle workers batches of its own, from the same database, so that the model sees what mutation
+found and mutation works on what the model wrote. The mix depends on timing, so such a run is no
+longer a deterministic function of its seed.
+
 Stopping: `search.max_samples`, `search.stop_at_score`, and `search.max_seconds`, a wall-clock
 limit of the whole run from its `started` (the job's start: `colmo.budget.job_start`), with the search's own deadline before it
 (`colmo.budget`: the finish's time and the programs in flight left over). At the search's
@@ -39,7 +45,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
-from colmo.answers import AnswerReader, regenerate
+from colmo.answers import AnswerReader
 from colmo.budget import TimeBudget
 from colmo.config import SearchConfig
 from colmo.database import ProgramDatabase, StoredProgram
@@ -47,13 +53,11 @@ from colmo.errors import RunError
 from colmo.evaluation import Evaluator, Executor, ExecutorClosed
 from colmo.executor import make_executor
 from colmo.finish import BestPrograms, finish
-from colmo.generate import GENERATORS, Generation, Generator, GeneratorError, make_generator
-from colmo.generate.probe import ProgramProbe
+from colmo.generate import Generation, Generator
 from colmo.heldout import training_evaluator
 from colmo.optimize.methods import tunes_constants
 from colmo.outcomes import SampleOutcomes
 from colmo.program import parametrize
-from colmo.prompt import Prompt, build_prompt
 from colmo.record import (
     EVALUATED,
     FINISHED,
@@ -68,7 +72,9 @@ from colmo.record import (
     SearchObserver,
     Summary,
     Totals,
+    by_generator,
 )
+from colmo.sampler import POLL_S, Sampler
 from colmo.signals import stop_signals
 from colmo.specs import Spec, load_task_spec
 from colmo.store import StoreError, open_run, run_settings, write_outputs
@@ -76,7 +82,6 @@ from colmo.store import StoreError, open_run, run_settings, write_outputs
 log = logging.getLogger("colmo.search")
 
 STARTER_SAMPLE = -1
-_POLL_S = 0.2  # how often waits check the deadline and interruptions
 
 
 @dataclass
@@ -87,6 +92,9 @@ class _Batch:
     generation_seconds: float
     started: float
     outcomes: list[concurrent.futures.Future] = field(default_factory=list)  # of SampleRecord
+
+    def done(self) -> bool:
+        return all(outcome.done() for outcome in self.outcomes)
 
 
 class Search:
@@ -104,8 +112,7 @@ class Search:
         self.store, self.lock = open_run(self.run_dir, run_settings(cfg), resume=bool(cfg.resume))
         self.earlier = self.store.elapsed()  # a resumed run's time so far, to add this process's to
         self.executor = executor or make_executor(cfg.executor)
-        self.generator = generator
-        self.probe: Optional[ProgramProbe] = None
+        self.in_flight: deque[_Batch] = deque()
         self.counters = Counters()
         self.best_so_far: list[tuple[int, float]] = []
         # resumed_samples: the model calls an earlier process of a resumed run settled
@@ -113,13 +120,13 @@ class Search:
         self.generation_seconds = 0.0
         self.stop_reason = ""
         self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=tunes_constants(cfg.gfo))
+        self.sampler = Sampler(cfg, self.spec, self.reader, generator)
         self.stopping = threading.Event()  # programs in flight stop tuning at their next candidate
         self.outcomes = SampleOutcomes(
             cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop,
             observe=lambda result: self.budget.observe(result),
         )
         self.budget = TimeBudget(cfg.search.max_seconds, self.outcomes.running, started=started, tuned=tunes_constants(cfg.gfo))
-        self.generation_thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
         self.evaluator: Optional[Evaluator] = None
         self.database: Optional[ProgramDatabase] = None
 
@@ -132,14 +139,14 @@ class Search:
     def _run(self) -> Summary:
         try:
             try:
-                if not self._wants_probe():  # a generator that cannot start ends the run before any work
-                    self._start_generator()
+                if not self.sampler.needs_evaluator():  # a generator that cannot start ends the run before any work
+                    self.sampler.start(None)
                 self.evaluator = self.outcomes.evaluator = training_evaluator(self.spec, self.cfg.task, self.cfg.executor, self.executor, self.cfg.seed)
                 self.database = ProgramDatabase(self.cfg.database, self._starter(), self.cfg.seed)
                 self.budget.plan(self.cfg, self.evaluator.calibration, self.program_seconds, self.executor)
                 self.best_so_far = [(0, self.database.best.score)]
                 to_evaluate = self._replay()
-                self._start_generator()
+                self.sampler.start(self.evaluator)
                 self.budget.search_starts()
                 self._loop(to_evaluate)
             except (KeyboardInterrupt, ExecutorClosed):  # a signal before the handlers were in place, or a second one
@@ -157,7 +164,10 @@ class Search:
                     until=self.budget.finish_by(), referee=self.budget.finish_referee_cost,
                 )
             best_program = self.database.best if self.database else None
-            summary = best.summary(self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals(), *self.budget.phases())
+            summary = best.summary(
+                self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals(), *self.budget.phases(),
+                by_generator=by_generator(self.store.records()),
+            )
             write_outputs(summary, self.run_dir)
             for observer in self.observers:
                 observer.on_finish(summary)
@@ -166,12 +176,12 @@ class Search:
         return summary
 
     def _loop(self, resumed: list[SampleRecord]) -> None:
-        in_flight: deque[_Batch] = deque()
+        in_flight = self.in_flight
         if resumed:
             in_flight.append(self._reevaluate(resumed))
         while True:
             while not self._stop_requested() and len(in_flight) < self.cfg.search.queue_size and self._samples_left() > 0:
-                batch = self._generate()
+                batch = self._generate(self.sampler.generator, self._batch_size())
                 if batch is None:
                     break
                 in_flight.append(batch)
@@ -217,46 +227,21 @@ class Search:
             log.info("resumed %s: %d samples, best %.2f, %d to evaluate again", self.run_dir, self.counters.samples, self.database.best.score, len(to_evaluate))
         return to_evaluate
 
-    def _wants_probe(self) -> bool:
-        return self.generator is None and GENERATORS[self.cfg.llm.name].wants_probe
-
-    def _start_generator(self) -> None:
-        """The generator of `cfg.llm` (unless one was given); one that cannot start is a
-        `RunError` (a server that does not answer, a model that does not load)."""
-        if self.generator is not None:
-            return
-        self.probe = ProgramProbe(self.evaluator) if self._wants_probe() else None
-        try:
-            self.generator = make_generator(self.cfg.llm, self.cfg.seed, self.probe)
-        except GeneratorError as error:
-            raise RunError(f"llm={self.cfg.llm.name}: {error}") from None
-
     # -- generation ------------------------------------------------------------------------------
 
     def _samples_left(self) -> int:
         return self.cfg.search.max_samples - self.counters.samples - self.in_flight_samples
 
-    def _prompt(self, retry: int = 0) -> Prompt:
-        """A prompt from a new selection of the database; `retry`: the regeneration of an answer it is for."""
-        spec, tuned = self.spec, tunes_constants(self.cfg.gfo)
-        prompt = build_prompt(spec.description, self.database.select(), constants_tuned=tuned, allowed_imports=spec.allowed_imports)
-        return dataclasses.replace(prompt, retry=retry)
-
-    def _generate(self) -> Optional[_Batch]:
-        """Generate the next batch and start evaluating it; None if the search is stopping."""
-        n = self._batch_size()
+    def _generate(self, generator: Generator, n: int) -> Optional[_Batch]:
+        """Generate the next batch of `n` samples with `generator` and start evaluating it; None
+        if the search is stopping."""
         if not n:
             return None
-        prompt = self._prompt()
         started = time.perf_counter()
-        generations = self._generated(prompt, n)
-        if generations is None:
+        answers = self.sampler.answers(generator, self.database, n, self._samples_left() - n, self._abandon_generation)
+        if answers is None:
+            self.stop_reason = self.stop_reason or self.sampler.failure
             return None
-        answers = [self.reader.answer(prompt, generation) for generation in generations]
-        answers = regenerate(
-            answers, self.reader, self.database.is_known, self._prompt, self._generated, self.cfg.search.duplicate_retries, self._samples_left() - n,
-            follow_up=self.generator.follows_up,
-        )
         seconds = time.perf_counter() - started
         self.generation_seconds += seconds
         batch = _Batch(self.next_batch, seconds, time.perf_counter())
@@ -274,22 +259,14 @@ class Search:
         self.in_flight_samples += sum(sample.generation.calls for sample in samples)
         return batch
 
-    def _generated(self, prompt: Prompt, n: int) -> Optional[list[Generation]]:
-        """The generator's answers to `prompt`; None if the search is stopping or the generator failed."""
-        generating = self.generation_thread.submit(self.generator.generate, prompt, n)
-        while not generating.done():
-            if self._stop_requested() or not self.budget.can_start(n):
-                self.stop_reason = self.stop_reason or "max_seconds"  # the time left can no longer take this batch
-                generating.cancel()
-                self.generator.cancel()
-                return None
-            concurrent.futures.wait([generating], timeout=_POLL_S)
-        try:
-            return generating.result()
-        except GeneratorError as error:  # the batches in flight are still integrated
-            self.stop_reason = f"generator failed: {error}"
-            log.error("%s", self.stop_reason)
-            return None
+    def _abandon_generation(self, programs: int) -> bool:
+        """Asked while the generator's call is in flight: whether to abandon it (the search is
+        stopping, or the time left can no longer take its `programs`); meanwhile the filler fills."""
+        if self._stop_requested() or not self.budget.can_start(programs):
+            self.stop_reason = self.stop_reason or "max_seconds"
+            return True
+        self._fill()
+        return False
 
     def _reevaluate(self, records: list[SampleRecord]) -> _Batch:
         """The pending and interrupted samples of a resumed run, as a batch of their own."""
@@ -299,10 +276,23 @@ class Search:
         self.in_flight_samples += sum(record.model_calls for record in records)
         return batch
 
+    def _fill(self) -> None:
+        """Integrate the batches that are in, and give idle workers a batch of the filler's."""
+        if self.sampler.filler is None:
+            return
+        while self.in_flight and self.in_flight[0].done():
+            self._integrate(self.in_flight.popleft())
+            self._check_limits()
+        idle = self.executor.n_workers - self.outcomes.running() * self.cfg.gfo.workers
+        if idle > 0 and not self._stop_requested():
+            batch = self._generate(self.sampler.filler, self.budget.programs_that_fit(min(idle, self._samples_left())))
+            if batch is not None:
+                self.in_flight.append(batch)
+
     # -- integration ----------------------------------------------------------------------------
 
     def _integrate(self, batch: _Batch) -> None:
-        while not concurrent.futures.wait(batch.outcomes, timeout=_POLL_S).not_done == set():
+        while not concurrent.futures.wait(batch.outcomes, timeout=POLL_S).not_done == set():
             self._stop_requested()  # the deadline stops the programs in flight at their next candidate
         records = [outcome.result() for outcome in batch.outcomes]  # stored; an exception here is a bug or a full disk
         for record in records:
@@ -372,14 +362,13 @@ class Search:
 
     def _stop_programs(self) -> None:
         self.stopping.set()
-        self.generation_thread.shutdown(wait=False, cancel_futures=True)
+        self.sampler.stop()
         self.outcomes.shutdown()
 
     def _close(self) -> None:
         with contextlib.suppress(StoreError):  # a store that failed: the summary has the run's time
             self.store.set_elapsed(self.elapsed())
-        for resource in filter(None, (self.generator, self.probe)):
-            resource.close()
+        self.sampler.close()
         if not self.executor.closed:
             self.executor.close()
         self.store.close()

@@ -94,11 +94,17 @@ class SearchLoopConfig:
     )
     stop_at_score: Optional[float] = option(None, "stop once the best training score reaches this")
     queue_size: int = option(2, "batches in flight: generation overlaps evaluation")
+    fill: Optional[str] = option(
+        None, "mutate: while the generator's call is in flight, batches of colmo's embedded mutation of the best programs "
+        "(the generator's included) keep idle workers busy, in the same islands; samples record which generator made them "
+        "(a run is then no longer a deterministic function of its seed: the mix depends on timing)",
+    )
     progress: bool = option(True, "live progress display on a terminal, a plain line every progress_every_s otherwise")
     progress_every_s: float = option(30.0, "seconds between plain progress lines when stderr is not a terminal")
 
     def __post_init__(self) -> None:
         at_least(self, "search", max_samples=1, queue_size=1, duplicate_retries=0)
+        require(self.fill in (None, "mutate"), f"search.fill must be null or mutate, got {self.fill!r}")
         require(self.max_seconds >= 0, f"search.max_seconds must be >= 0 (0 = no limit), got {self.max_seconds}")
         above(self, "search", progress_every_s=0)
 

@@ -14,14 +14,14 @@ from colmo.record import SampleRecord
 PROGRAMS_TABLE = "programs.json"
 PROGRAMS_PAGE = "programs.html"
 # The UI shows a table's first columns: score and code first, bookkeeping last.
-PROGRAM_COLUMNS = ("sample", "score", "heldout_score", "status", "code", "failure", "island", "batch", "key", "params", "parents")
+PROGRAM_COLUMNS = ("sample", "score", "heldout_score", "status", "code", "failure", "island", "batch", "key", "params", "parents", "generator")
 
 def program_row(record: SampleRecord) -> dict[str, Any]:
     """One sample as a row of the programs table (its held-out score is filled in at the end)."""
     return {
         "sample": record.sample, "score": record.score, "heldout_score": record.heldout_score, "status": record.status,
         "code": record.code, "failure": record.failure, "island": record.island, "batch": record.batch,
-        "key": record.key, "params": record.params, "parents": record.parent_keys,
+        "key": record.key, "params": record.params, "parents": record.parent_keys, "generator": record.generator,
     }
 
 
@@ -36,11 +36,11 @@ def programs_page(rows: Sequence[dict[str, Any]], title: str) -> str:
         failure = html.escape(row["failure"] or "")
         cells.append(
             f"<tr><td>{row['sample']}</td><td>{number(row['score'])}</td><td>{number(row['heldout_score'])}</td>"
-            f"<td>{row['status']}</td><td>{row['island']}</td><td><pre>{code}</pre>{failure}</td></tr>"
+            f"<td>{row['status']}</td><td>{row['island']}</td><td>{html.escape(row['generator'])}</td><td><pre>{code}</pre>{failure}</td></tr>"
         )
     style = "body{font-family:sans-serif;font-size:13px}td{vertical-align:top;border-top:1px solid #ddd;padding:4px 8px}pre{margin:0}"
     return (
         f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title><style>{style}</style></head><body>"
         f"<h3>{html.escape(title)}: {len(rows)} samples, best first</h3><table><tr><th>sample</th><th>score</th>"
-        f"<th>held-out</th><th>status</th><th>island</th><th>code / failure</th></tr>{''.join(cells)}</table></body></html>"
+        f"<th>held-out</th><th>status</th><th>island</th><th>generator</th><th>code / failure</th></tr>{''.join(cells)}</table></body></html>"
     )

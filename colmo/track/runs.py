@@ -214,7 +214,7 @@ class MlflowTracker:
     def on_finish(self, summary: Summary) -> None:
         # The rest of the summary's totals were logged with the last batch.
         headline = {name: value for name, value in summary.robustness.items() if name.startswith("robustness_")}
-        log_metrics(self.client, self.run_id, {"best_heldout_score": summary.best_heldout_score, **headline}, summary.samples)
+        log_metrics(self.client, self.run_id, {"best_heldout_score": summary.best_heldout_score, **headline, **_split(summary)}, summary.samples)
         heldout = {entry["sample"]: entry["heldout_score"] for entry in summary.heldout}
         for row in self.rows:
             row["heldout_score"] = heldout.get(row["sample"], row["heldout_score"])
@@ -327,3 +327,11 @@ def track_optimize(cfg: OptimizeConfig, result: dict[str, Any], files: Sequence[
         raise
     run.end(FAILED if result.get("failure") else FINISHED)
     return run.run_id
+
+
+def _split(summary: Summary) -> dict[str, Optional[float]]:
+    """A search of more than one generator (`search.fill`): each one's samples, programs
+    evaluated and best score, as `<metric>_<generator>`."""
+    if len(summary.by_generator) < 2:
+        return {}
+    return {f"{metric}_{name}": entry[metric] for name, entry in summary.by_generator.items() for metric in ("samples", "programs_evaluated", "best_score")}

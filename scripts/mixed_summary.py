@@ -1,0 +1,54 @@
+"""The table of scripts/mixed_experiment.sh: every finished run, and each variant's mean ± std.
+
+    python scripts/mixed_summary.py OUT
+
+Per run (OUT/<task>/<variant>/s<seed>/0/summary.json): the best training and held-out scores,
+samples, each generator's share, and the simplified winner's lines and parameters.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import sys
+from pathlib import Path
+
+
+def row(path: Path) -> dict:
+    summary = json.loads(path.read_text())
+    task, variant, seed = path.parts[-5], path.parts[-4], path.parts[-3]
+    simplified = summary.get("simplified") or {}
+    split = ", ".join(
+        f"{name} {entry['samples']} ({entry['programs_evaluated']} evaluated, best {entry['best_score']})"
+        for name, entry in summary.get("by_generator", {}).items()
+    )
+    return {
+        "task": task, "variant": variant, "seed": seed, "best": summary["best_score"], "heldout": summary["best_heldout_score"],
+        "samples": summary["samples"], "split": split, "lines": simplified.get("lines"), "params": simplified.get("n_params"),
+        "seconds": summary["seconds"], "stop": summary["stop_reason"],
+    }
+
+
+def main(out: Path) -> None:
+    rows = [row(path) for path in sorted(out.glob("*/*/s*/0/summary.json"))]
+    print("| task | variant | seed | best | held-out | samples | by generator | simplified lines | parameters | seconds |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        heldout = "-" if r["heldout"] is None else f"{r['heldout']:.1f}"
+        print(
+            f"| {r['task']} | {r['variant']} | {r['seed']} | {r['best']:.1f} | {heldout} | {r['samples']} | {r['split']} "
+            f"| {r['lines']} | {r['params']} | {r['seconds']:.0f} |"
+        )
+    print()
+    print("| task | variant | seeds | best, mean ± std | held-out, mean ± std |")
+    print("|---|---|---|---|---|")
+    for key in sorted({(r["task"], r["variant"]) for r in rows}):
+        group = [r for r in rows if (r["task"], r["variant"]) == key]
+        best = [r["best"] for r in group]
+        heldout = [r["heldout"] for r in group if r["heldout"] is not None]
+        spread = lambda xs: f"{statistics.mean(xs):.1f} ± {statistics.stdev(xs):.1f}" if len(xs) > 1 else (f"{xs[0]:.1f}" if xs else "-")  # noqa: E731
+        print(f"| {key[0]} | {key[1]} | {len(group)} | {spread(best)} | {spread(heldout)} |")
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]))
