@@ -55,12 +55,12 @@ def flat(observation) -> np.ndarray:
 
 PARITY = [
     # (domain, task, colmo environment, seed): one full episode each.
-    ("ball_in_cup", "catch", BallInCup, 0),
-    ("ball_in_cup", "catch", BallInCup, 5),
+    ("ball_in_cup", "catch", lambda: BallInCup(observation="dm_control"), 0),
+    ("ball_in_cup", "catch", lambda: BallInCup(observation="dm_control"), 5),
     ("cheetah", "run", Cheetah, 0),
     ("cheetah", "run", Cheetah, 5),
-    ("quadruped", "run", lambda: Quadruped(reward="dm_control"), 0),
-    ("quadruped", "run", lambda: Quadruped(reward="dm_control"), 5),
+    ("quadruped", "run", lambda: Quadruped(reward="dm_control", start="random"), 0),
+    ("quadruped", "run", lambda: Quadruped(reward="dm_control", start="random"), 5),
 ]
 
 
@@ -84,6 +84,27 @@ def test_matches_dm_control_exactly(suite, domain, task, make, seed):
     assert timestep.last(), "dm_control's episode is longer than the colmo horizon"
 
 
+def test_ball_in_cup_observes_the_ball_as_the_papers_code_did(suite, examples):
+    # The paper's ball height is dm_control's less 0.3 m; its published policy reads that layout.
+    reference, env = suite.load("ball_in_cup", "catch", task_kwargs={"random": 2}), BallInCup()
+    expected = flat(reference.reset().observation)
+    expected[3] -= 0.3
+    assert np.array_equal(env.reset(2), expected)
+    namespace: dict = {}
+    exec((examples / "paper_ball_in_cup.py").read_text(), namespace)
+    assert evaluate_policy(env, namespace["policy"], range(10)).score > 500  # the paper: 755 over 1000 episodes
+    assert evaluate_policy(BallInCup(observation="dm_control"), namespace["policy"], range(10)).score < 200
+
+
+def test_the_quadruped_starts_upright_as_the_papers_policy_needs(examples):
+    namespace: dict = {}
+    exec((examples / "paper_quadruped.py").read_text(), namespace)
+    upright = Quadruped()
+    assert upright.reset(3)[47] == pytest.approx(1.0)  # torso_upright
+    assert evaluate_policy(upright, namespace["policy"], range(6)).score > 150  # the paper: 181.3
+    assert evaluate_policy(Quadruped(start="random"), namespace["policy"], range(6)).score < 120
+
+
 def test_cheetah_reward_is_the_papers(suite):
     """The paper's clip(v / 10, 0, 1), v dm_control's `speed()`: equal up to rounding."""
     reference = suite.load("cheetah", "run", task_kwargs={"random": 3})
@@ -104,7 +125,7 @@ def test_cheetah_reward_is_the_papers(suite):
 def test_quadruped_paper_reward(suite):
     """reward="paper" is clip(v / 10, 0, 1) of dm_control's torso velocity, exactly."""
     reference = suite.load("quadruped", "run", task_kwargs={"random": 2})
-    env = Quadruped()
+    env = Quadruped(start="random")  # dm_control's start, to compare step by step
     reference.reset()
     env.reset(2)
     rng = np.random.default_rng(2)
@@ -115,7 +136,9 @@ def test_quadruped_paper_reward(suite):
         assert reward == min(max(reference.physics.torso_velocity()[0] / 10, 0.0), 1.0)
 
 
-def test_quadruped_rejects_unknown_reward():
+def test_quadruped_rejects_unknown_reward_and_start():
+    with pytest.raises(ValueError, match="unknown start"):
+        Quadruped(start="sideways")
     with pytest.raises(ValueError, match="unknown reward"):
         Quadruped(reward="fast")
 

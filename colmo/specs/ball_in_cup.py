@@ -10,10 +10,10 @@ the ball up and catch it in the cup.
 Observation (size 8): position (4) then velocity (4).
 - obs[0], obs[1]: cup displacement from its rest position, horizontal and vertical (m, z up).
   The cup is 0.1 m wide and 0.1 m deep; its rim centre is at x = obs[0], height 0.6 + obs[1].
-- obs[2], obs[3]: ball position: x = obs[2], height 0.2 + obs[3] (m). Ball radius 0.025 m.
+- obs[2], obs[3]: ball position: x = obs[2], height 0.5 + obs[3] (m). Ball radius 0.025 m.
 - obs[4:8]: the time derivatives of obs[0:4] (m/s), same order.
-The ball is in the cup when |ball x - cup x| < 0.025 and |(0.2 + obs[3]) - (0.55 + obs[1])| < 0.025,
-that is when obs[3] - obs[1] is close to 0.35 and obs[2] - obs[0] is close to 0.
+The ball is in the cup when |ball x - cup x| < 0.025 and |(0.5 + obs[3]) - (0.55 + obs[1])| < 0.025,
+that is when obs[3] - obs[1] is close to 0.05 and obs[2] - obs[0] is close to 0.
 Action (shape (2,)): horizontal and vertical force commands for the cup, each in [-1, 1]
 (values outside are clipped). Control period 20 ms, episodes of 1000 steps. Reward: 1 for every
 step the ball is inside the cup, 0 otherwise. The ball starts at a random position, at rest.

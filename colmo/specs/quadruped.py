@@ -7,8 +7,8 @@ joint, and "lift" and "extend" servos that act on combinations of the pitch, kne
 angles (lift = (pitch - ankle) / 2 raises the foot, extend = pitch / 4 - knee / 2 + ankle / 4
 stretches the leg). Each servo's target follows the commanded action through a first-order
 filter with a 0.1 s time constant. The goal is to run forward, in the torso's facing direction,
-as fast as possible. Episodes start with the torso in a uniformly random orientation, just
-above the floor, so the robot may first have to turn itself upright.
+as fast as possible. Episodes start with the torso upright and level, facing forward, just
+above the floor.
 
 Observation (size 78). Legs are ordered front-left, front-right, back-right, back-left.
 - obs[0:16]: joint angles (rad), per leg yaw, pitch, knee, ankle.
