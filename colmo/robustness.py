@@ -6,7 +6,9 @@ then all of them together; the control delay, counted in steps rather than as a 
 its own short grid. Every point is scored by the caller's `score` (the referee on held-out
 episodes, in `colmo-evaluate robustness=true`) on the same episode seeds, whose perturbation
 draws differ only in scale from one magnitude to the next, so the curves are paired and the
-report is a deterministic function of the policy and the seeds. This module knows no front end.
+report is a deterministic function of the policy and the seeds. Each point carries the 95%
+confidence interval of its mean over the episodes (Student's t), so that a reader can tell a
+fragile policy from an unlucky draw. This module knows no front end.
 """
 
 from __future__ import annotations
@@ -14,9 +16,12 @@ from __future__ import annotations
 import csv
 import json
 import math
+import statistics
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable, Optional, Sequence
+
+from scipy import stats
 
 from colmo.config import PerturbConfig
 from colmo.environments.perturb import PERTURB_OPTION, with_perturbation
@@ -26,6 +31,14 @@ FACTORS = ("mass", "damping", "frictionloss", "friction", "gain", "obs_noise", "
 ALL = "all"
 FILES = ("robustness.json", "robustness.csv", "robustness.png")  # what `save` writes
 HEADLINE_MAGNITUDE = 0.1  # `headline` quotes every factor together at this magnitude
+CONFIDENCE = 0.95  # of each point's interval
+
+
+def half_width(values: Sequence[float]) -> Optional[float]:
+    """Half the `CONFIDENCE` interval of the mean of `values` (None for fewer than two)."""
+    if len(values) < 2:
+        return None
+    return float(stats.t.ppf((1 + CONFIDENCE) / 2, len(values) - 1) * statistics.stdev(values) / math.sqrt(len(values)))
 
 
 @dataclass(frozen=True)
@@ -40,6 +53,17 @@ class Point:
     def score(self) -> Optional[float]:
         return None if self.evaluation.failure else self.evaluation.score
 
+    @property
+    def interval(self) -> Optional[float]:
+        """Half the interval of the score over the point's episodes."""
+        return None if self.evaluation.failure else half_width(self.evaluation.returns)
+
+    def differences(self, nominal: Evaluation) -> Optional[list[float]]:
+        """Per episode, this point's return less the nominal model's on the same episode."""
+        if self.evaluation.failure or nominal.failure or len(self.evaluation.returns) != len(nominal.returns):
+            return None
+        return [a - b for a, b in zip(self.evaluation.returns, nominal.returns)]
+
 
 @dataclass(frozen=True)
 class RobustnessReport:
@@ -52,18 +76,44 @@ class RobustnessReport:
     def nominal_score(self) -> Optional[float]:
         return Point("nominal", 0.0, self.nominal).score
 
+    def point(self, factor: str, magnitude: float) -> Point:
+        if magnitude == 0:
+            return Point("nominal", 0.0, self.nominal)
+        return next(p for p in self.points if p.factor == factor and p.magnitude == magnitude)
+
     def score(self, factor: str, magnitude: float) -> Optional[float]:
-        return next(p.score for p in self.points if p.factor == factor and p.magnitude == magnitude)
+        return self.point(factor, magnitude).score
 
-    def entries(self) -> list[dict]:
+    def entries(self, value: Callable[[Point], Optional[float]] = lambda point: point.score) -> list[dict]:
         """One entry per magnitude, nominal (0) first: the score of each factor and of all
-        together; then one entry per delay (`delay_steps`)."""
-        rows = [{"magnitude": 0.0, **{name: self.nominal_score for name in (*FACTORS, ALL)}}]
-        rows += [{"magnitude": m, **{name: self.score(name, m) for name in (*FACTORS, ALL)}} for m in self.magnitudes]
-        return rows
+        together (or `value` of each point: `intervals`)."""
+        return [{"magnitude": m, **{name: value(self.point(name, m)) for name in (*FACTORS, ALL)}} for m in (0.0, *self.magnitudes)]
 
-    def delay_entries(self) -> list[dict]:
-        return [{"delay_steps": 0, "score": self.nominal_score}] + [{"delay_steps": k, "score": self.score("delay", k)} for k in self.delays]
+    def delay_entries(self, value: Callable[[Point], Optional[float]] = lambda point: point.score) -> list[dict]:
+        """One entry per control delay (`delay_steps`), none first."""
+        return [{"delay_steps": k, "score": value(self.point("delay", k))} for k in (0, *self.delays)]
+
+    def change(self, point: Point) -> Optional[float]:
+        """The point's score less the nominal one (the mean of the paired differences)."""
+        differences = point.differences(self.nominal)
+        return None if differences is None else float(sum(differences) / len(differences))
+
+    def change_interval(self, point: Point) -> Optional[float]:
+        """Half the interval of `change`, from the paired differences: every point plays the
+        nominal model's episodes, so this is far narrower than the score's own interval."""
+        differences = point.differences(self.nominal)
+        return None if differences is None else half_width(differences)
+
+    def as_json(self) -> dict:
+        """The report as `robustness.json` holds it: the scores; beside them, in the same layout,
+        the half-widths of their `CONFIDENCE` intervals, each point's change from the nominal
+        score and the half-width of that change's paired interval."""
+        return {
+            "robustness": self.entries(), "delay": self.delay_entries(), "confidence": CONFIDENCE, "episodes": len(self.nominal.returns),
+            "robustness_interval": self.entries(lambda p: p.interval), "delay_interval": self.delay_entries(lambda p: p.interval),
+            "robustness_change": self.entries(self.change), "delay_change": self.delay_entries(self.change),
+            "robustness_change_interval": self.entries(self.change_interval), "delay_change_interval": self.delay_entries(self.change_interval),
+        }
 
     def failures(self) -> list[str]:
         return [f"{p.factor} {p.magnitude:g}: {p.evaluation.failure}" for p in self.points if p.evaluation.failure]
@@ -110,18 +160,27 @@ def robustness_report(
     return RobustnessReport(score(PerturbConfig()), magnitudes, tuple(points), delays)
 
 
-def _cell(value: Optional[float]) -> str:
-    return "failed" if value is None or not math.isfinite(value) else f"{value:.1f}"
+def _cell(value: Optional[float], interval: Optional[float], sign: str = "") -> str:
+    if value is None or not math.isfinite(value):
+        return "failed"
+    return f"{value:{sign}.1f}" if interval is None else f"{value:{sign}.1f}±{interval:.1f}"
 
 
 def table(report: RobustnessReport) -> str:
-    """The scores as a plain-text table: one row per magnitude, one column per factor."""
-    names = (*FACTORS, ALL)
-    lines = ["magnitude " + " ".join(f"{name:>12}" for name in names)]
-    for entry in report.entries():
-        lines.append(f"{entry['magnitude']:>9.0%} " + " ".join(f"{_cell(entry[name]):>12}" for name in names))
+    """The scores as a plain-text table: one row per magnitude, one column per factor, each
+    score with the half-width of its interval."""
+    names, episodes = (*FACTORS, ALL), len(report.nominal.returns)
+    header = "magnitude " + " ".join(f"{name:>14}" for name in names)
+    lines = [f"held-out score ± {CONFIDENCE:.0%} interval, {episodes} episodes per point", header]
+    for magnitude in (0.0, *report.magnitudes):
+        lines.append(f"{magnitude:>9.0%} " + " ".join(f"{_cell(p.score, p.interval):>14}" for p in (report.point(n, magnitude) for n in names)))
+    lines += ["", f"change from nominal, paired over the same {episodes} episodes, ± {CONFIDENCE:.0%} interval", header]
+    for magnitude in report.magnitudes:
+        points = (report.point(n, magnitude) for n in names)
+        lines.append(f"{magnitude:>9.0%} " + " ".join(f"{_cell(report.change(p), report.change_interval(p), '+'):>14}" for p in points))
     if report.delays:
-        lines.append("delay (steps) " + " ".join(f"{e['delay_steps']:>3}: {_cell(e['score'])}" for e in report.delay_entries()))
+        lines.append("")
+        lines.append("delay (steps) " + " ".join(f"{k:>3}: {_cell(p.score, p.interval)}" for k in (0, *report.delays) for p in [report.point("delay", k)]))
     return "\n".join(lines)
 
 
@@ -132,24 +191,35 @@ def save(report: RobustnessReport, directory: Path, title: str) -> list[Path]:
 
     directory.mkdir(parents=True, exist_ok=True)
     paths = [directory / name for name in FILES]
-    paths[0].write_text(json.dumps({"robustness": report.entries(), "delay": report.delay_entries()}, indent=1) + "\n")
+    paths[0].write_text(json.dumps(report.as_json(), indent=1) + "\n")
     with paths[1].open("w", newline="") as stream:
         writer = csv.writer(stream)
-        writer.writerow(["factor", "magnitude", "score"])
-        for entry in report.entries():
-            writer.writerows([name, entry["magnitude"], entry[name]] for name in (*FACTORS, ALL))
-        writer.writerows(["delay_steps", e["delay_steps"], e["score"]] for e in report.delay_entries()[1:])
+        writer.writerow(["factor", "magnitude", "score", "interval", "change", "change_interval"])
+        rows = [(name, magnitude) for magnitude in (0.0, *report.magnitudes) for name in (*FACTORS, ALL)]
+        rows += [("delay", k) for k in report.delays]
+        for name, magnitude in rows:
+            p = report.point(name, magnitude)
+            writer.writerow([name if name != "delay" else "delay_steps", magnitude, p.score, p.interval, report.change(p), report.change_interval(p)])
     figure = Figure(figsize=(10, 4), layout="constrained")
     axes, delay_axes = figure.subplots(1, 2, width_ratios=(3, 1))
-    entries = report.entries()
-    x = [100 * e["magnitude"] for e in entries]
+    magnitudes = (0.0, *report.magnitudes)
     for name in (*FACTORS, ALL):
-        y = [math.nan if e[name] is None else e[name] for e in entries]
-        axes.plot(x, y, marker="o", label=name, linewidth=2.5 if name == ALL else 1.2, color="black" if name == ALL else None)
-    axes.set(xlabel="perturbation magnitude (%)", ylabel="held-out score", title=title)
+        line = _band(axes, [100 * m for m in magnitudes], [report.point(name, m) for m in magnitudes], name)
+        if name == ALL:
+            line.set(linewidth=2.5, color="black")
+    axes.set(xlabel="perturbation magnitude (%)", ylabel=f"held-out score ({CONFIDENCE:.0%} interval shaded)", title=title)
     axes.legend(fontsize="small")
-    delay = report.delay_entries()
-    delay_axes.plot([e["delay_steps"] for e in delay], [math.nan if e["score"] is None else e["score"] for e in delay], marker="o")
+    delays = (0, *report.delays)
+    _band(delay_axes, delays, [report.point("delay", k) for k in delays], "delay")
     delay_axes.set(xlabel="control delay (steps)", title="delay")
     figure.savefig(paths[2], dpi=100)
     return paths
+
+
+def _band(axes, x: Sequence[float], points: Sequence[Point], label: str):
+    """One curve of scores with its intervals as a shaded band; the line drawn."""
+    y = [math.nan if p.score is None else p.score for p in points]
+    width = [math.nan if p.interval is None else p.interval for p in points]
+    (line,) = axes.plot(x, y, marker="o", label=label, linewidth=1.2)
+    axes.fill_between(x, [a - w for a, w in zip(y, width)], [a + w for a, w in zip(y, width)], color=line.get_color(), alpha=0.15, linewidth=0)
+    return line

@@ -140,6 +140,29 @@ def test_colmo_evaluate_robustness_reports_each_magnitude_nominal_first_and_repe
     assert "magnitude" in run.stdout and len(list(tmp_path.rglob("robustness.png"))) == 2
 
 
+def test_each_point_has_its_interval_and_its_paired_change_from_nominal():
+    from scipy import stats
+
+    from colmo.evaluation import Evaluation
+    from colmo.robustness import robustness_report, table
+
+    nominal = (100.0, 300.0, 500.0, 700.0)
+
+    def score(perturb: PerturbConfig) -> Evaluation:
+        # a point loses 10 + 20 * magnitude on every episode: its change is exact, its score as spread as nominal
+        loss = 0.0 if perturb == PerturbConfig() else 10.0 + 20.0 * (perturb.mass or perturb.delay or 0.5)
+        return Evaluation(tuple(r - loss for r in nominal))
+
+    report = robustness_report(score, [0.1], [2])
+    saved = report.as_json()
+    expected = stats.t.ppf(0.975, 3) * np.std(nominal, ddof=1) / 2
+    assert saved["robustness_interval"][0]["all"] == pytest.approx(expected)
+    assert saved["robustness_change"][1]["mass"] == pytest.approx(-12.0) and saved["robustness_change_interval"][1]["mass"] == pytest.approx(0.0)
+    assert saved["delay_change"][1]["score"] == pytest.approx(-50.0)
+    assert saved["confidence"] == 0.95 and saved["episodes"] == 4
+    assert f"388.0±{expected:.1f}" in table(report) and "-12.0±0.0" in table(report)
+
+
 def test_the_finish_plans_the_robustness_report_whole_or_not_at_all():
     grid = ("evaluation.robustness_magnitudes=[0.1,0.2]", "evaluation.robustness_delays=[1]", "evaluation.robustness_episodes=3")
     quiet = ("evaluation.simplify=false", "evaluation.render=false", "evaluation.top=1", "evaluation.episodes=2")

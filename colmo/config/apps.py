@@ -66,7 +66,10 @@ class EvaluateConfig(PolicyFileConfig):
 
     episodes: int = option(100, "held-out episodes")
     robustness: bool = option(False, "also score the policy over a grid of model-mismatch magnitudes (colmo.robustness)")
-    robustness_episodes: int = option(5, "held-out episodes per robustness grid point")
+    robustness_episodes: int = option(
+        20, "held-out episodes per robustness grid point, the same for every point: each point's score and its change from "
+        "nominal come with a 95% interval (paired over the episodes)",
+    )
     robustness_magnitudes: list[float] = option(ROBUSTNESS_MAGNITUDES, "relative magnitudes of the robustness grid (0, nominal, is always scored)")
     robustness_delays: list[int] = option(ROBUSTNESS_DELAYS, "control delays (steps) of the robustness grid")
 

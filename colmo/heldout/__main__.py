@@ -45,7 +45,7 @@ def main(cfg: EvaluateConfig) -> None:
             print(f"  failed: {failure}")
         paths = save(report, run_directory(), f"{cfg.task.name}: {Path(cfg.policy_file).name}")
         print("wrote " + ", ".join(str(path) for path in paths))
-        result |= {"robustness_episodes": cfg.robustness_episodes, "robustness": report.entries(), "delay": report.delay_entries()}
+        result |= {"robustness_episodes": cfg.robustness_episodes, **report.as_json()}
     print_result(result)
     if evaluation.failure:
         sys.exit(1)
