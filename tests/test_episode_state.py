@@ -45,6 +45,18 @@ policy.step = 0
 policy.integral = 0.0
 """
 
+# Counts the episodes before it in numpy's process-wide settings (print options, error handling),
+# which its module code reads and changes (issue 33 finding 4).
+NUMPY_SETTINGS_COUNTER = """import numpy as np
+
+EARLIER = np.get_printoptions()["precision"] - 8 + (np.geterr()["divide"] == "ignore")
+np.set_printoptions(precision=int(np.get_printoptions()["precision"] + 1))
+np.seterr(divide="ignore")
+
+def policy(obs):
+    return float(np.clip(0.5 * obs[2] - 0.1 * EARLIER, -1.0, 1.0))
+"""
+
 # Fails in some episodes only, at different steps (its module code draws from the episode's
 # seeded np.random): the first failing episode in seed order decides, fast path and referee alike.
 FAILS_IN_SOME_EPISODES = """import numpy as np
@@ -76,7 +88,7 @@ def pendulum():
         yield executor, evaluator
 
 
-@pytest.mark.parametrize("code", [COUNTER, INTEGRATOR], ids=["counter", "integrator"])
+@pytest.mark.parametrize("code", [COUNTER, INTEGRATOR, NUMPY_SETTINGS_COUNTER], ids=["counter", "integrator", "numpy settings"])
 def test_a_stateful_programs_score_does_not_depend_on_how_its_episodes_are_run(pendulum, code):
     executor, evaluator = pendulum
     program = parametrize(code)

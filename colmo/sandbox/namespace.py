@@ -188,6 +188,19 @@ def _guarded_import(allowed: frozenset[str], seed: int) -> Callable[..., types.M
     return import_
 
 
+# numpy's process-wide settings a program can set and read back (print options, floating-point
+# error handling), as the worker has them before any program runs: every program instance starts
+# from them, so that no episode learns what an earlier one in the same process did.
+_NUMPY_PRINT_OPTIONS = np.get_printoptions()
+_NUMPY_ERRORS = np.geterr()
+
+
+def reset_numpy_state() -> None:
+    """Put numpy's print options and error handling back to what a fresh process has."""
+    np.set_printoptions(**_NUMPY_PRINT_OPTIONS)
+    np.seterr(**_NUMPY_ERRORS)
+
+
 class Program:
     """A checked, compiled program: `new_policy` runs its module code anew for each episode."""
 
@@ -204,6 +217,7 @@ class Program:
         (`np.random` seeded with `seed`), with `params` as its constants; return its `policy`.
         Raises `ForbiddenProgram` for a policy-less program; whatever the module code raises
         propagates."""
+        reset_numpy_state()
         builtins_ = dict(_SAFE_BUILTINS, __import__=_guarded_import(self.allowed_imports, seed))
         namespace = {"__builtins__": builtins_, "__name__": "policy_module", "params": self.params}
         exec(self.code, namespace)
