@@ -49,5 +49,14 @@ def failure_reason(text: str) -> str:
 def describe_exception(error: BaseException, where: str = "") -> str:
     """The failure reason for an exception raised by a program (`where`: e.g. " (step 3)")."""
     if isinstance(error, MemoryError):
-        return failure_reason(f"memory: {str(error) or 'out of memory'}{where}")
-    return failure_reason(f"exception: {type(error).__name__}: {error}{where}")
+        return failure_reason(f"memory: {_message(error) or 'out of memory'}{where}")
+    return failure_reason(f"exception: {type(error).__name__}: {_message(error)}{where}")
+
+
+def _message(error: BaseException) -> str:
+    """`str(error)`, which a program can make fail (`ValueError(10 ** 5000)`: too many digits to
+    print); then a message saying so, not a crash of the process describing it."""
+    try:
+        return str(error)
+    except Exception as unprintable:
+        return f"(its message cannot be printed: {type(unprintable).__name__})"

@@ -36,6 +36,7 @@ from colmo.executor import LocalExecutor
 from colmo.generate import Generation, Generator
 from colmo.generate.mutate import MutateGenerator
 from colmo.intake import MAX_ANSWER_CHARS, Unusable, read_program
+from colmo.optimize.tune import NONDETERMINISTIC, TAMPERING, judged
 from colmo.rollout import episode_seeds
 from colmo.search import Search
 from colmo.specs import load_spec
@@ -233,6 +234,8 @@ HOSTILE = {
     "subarray object dtype": (policy_doing("a = np.zeros(1, dtype=('O', (1,)))"), "forbidden: object dtype 'O'"),
     "buffer keyword": (policy_doing("a = np.zeros(1).view()\n    b = np.asarray(a, like=a)\n    c = np.recarray((1,), buf=a, formats='f8')"), "forbidden: .recarray"),
     "resize under a view": (policy_doing("a = np.zeros(10 ** 6)\n    v = a[:]\n    a.resize(1, refcheck=False)\n    v[:] = 1"), "forbidden: .resize"),
+    # str() of its exception raises (too many digits to print): once the child crashed ("exited with code 70")
+    "unprintable exception": (policy_doing("raise ValueError(10 ** 5000)"), "exception: ValueError: (its message cannot be printed: ValueError) (step 0)"),
     "decorator rebinding": ("import numpy as np\n@(lambda f: np.poly1d)\ndef policy(obs):\n    pass\npolicy.x = 1\n", "forbidden: decorator on policy"),
 }
 
@@ -667,3 +670,11 @@ def test_a_forged_score_is_never_stored_nor_tracked_not_even_after_a_resume(tmp_
         text = mlflow_text(client, run_id, tmp_path / run_id)
         assert "tampering: " in text or run_id == resumed  # the programs table shows the failures ...
         assert not forged_numbers(text), run_id  # ... and no forged number
+
+
+@pytest.mark.parametrize("again, verdict", [((3.0, 4.0), TAMPERING), ((5.0, 6.0), NONDETERMINISTIC)], ids=["tampering", "nondeterministic"])
+def test_a_fast_path_the_referee_refutes_is_tampering_unless_the_referee_cannot_repeat_itself(again, verdict):
+    fast, referee = Evaluation((1.0, 2.0)), Evaluation((3.0, 4.0))
+    judgement = judged(referee, fast, again=lambda: Evaluation(again))
+    assert judgement.failure.startswith(verdict) and judgement.returns == referee.returns
+    assert judged(referee, Evaluation((3.0, 4.0)), again=lambda: pytest.fail("asked again")) is referee

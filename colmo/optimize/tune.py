@@ -46,6 +46,7 @@ TIMEOUT_FACTOR = 30.0
 # tampered with; the two run the same code on the same data, so honest programs agree exactly.
 _TAMPERING_TOLERANCE = 1e-9
 TAMPERING = "tampering:"  # how the failure of a program whose fast path the referee refutes begins
+NONDETERMINISTIC = "nondeterministic:"  # ... and of one whose episodes the referee cannot repeat either
 
 
 class CandidateEvaluator:
@@ -189,7 +190,7 @@ def optimize_program(
     final = fast
     if not fast.failure and fast is not tuning.initial:  # the program's own constants were refereed already
         refereed = evaluate.referee(params)
-        final = _refereed(refereed, fast)
+        final = judged(refereed, fast, again=lambda: evaluate.referee(params))
         evaluations, steps, scoring_seconds = evaluations + 1, steps + final.steps, scoring_seconds + refereed.seconds
     code = instantiate(program.skeleton, params, digits=digits)
     return ProgramResult(
@@ -198,14 +199,22 @@ def optimize_program(
     )
 
 
-def _refereed(referee: Evaluation, fast: Evaluation) -> Evaluation:
-    """The referee's evaluation, failed as tampering if the fast path reported other returns."""
-    if referee.failure or len(referee.returns) != len(fast.returns):
+def judged(referee: Evaluation, fast: Evaluation, again: Callable[[], Evaluation]) -> Evaluation:
+    """The referee's evaluation, failed if the program's own (fast-path) run reported other
+    returns: as nondeterministic if the referee, asked `again`, cannot repeat its own returns
+    either (the program's episodes differ from run to run), else as tampering."""
+    if referee.failure or len(referee.returns) != len(fast.returns) or _agree(referee.returns, fast.returns):
         return referee
-    if not np.allclose(referee.returns, fast.returns, rtol=_TAMPERING_TOLERANCE, atol=_TAMPERING_TOLERANCE):
+    second = again()
+    if not second.failure and not _agree(second.returns, referee.returns):
+        reason = f"{NONDETERMINISTIC} the same episodes gave different returns in two runs of the referee ({referee.score:.6g}, then {second.score:.6g})"
+    else:
         reason = f"{TAMPERING} the program's own run reported other returns than the referee's, which measured {referee.score:.6g}"
-        return Evaluation(referee.returns, reason, referee.steps)
-    return referee
+    return Evaluation(referee.returns, reason, referee.steps)
+
+
+def _agree(returns: Sequence[float], others: Sequence[float]) -> bool:
+    return bool(np.allclose(returns, others, rtol=_TAMPERING_TOLERANCE, atol=_TAMPERING_TOLERANCE))
 
 
 def calibrated(executor: Executor, evaluator: Evaluator, starter: ParametricProgram, timeout_s: Optional[float] = None) -> Evaluator:
