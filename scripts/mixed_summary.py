@@ -2,7 +2,7 @@
 
     python scripts/mixed_summary.py OUT
 
-Per run (OUT/<task>/<variant>/s<seed>/0/summary.json): the best training and held-out scores,
+Per run (OUT/<task>/<variant>/s<seed>/<job>/summary.json): the best training and held-out scores,
 samples, each generator's share, and the simplified winner's lines and parameters.
 """
 
@@ -30,7 +30,7 @@ def row(path: Path) -> dict:
 
 
 def main(out: Path) -> None:
-    rows = [row(path) for path in sorted(out.glob("*/*/s*/0/summary.json"))]
+    rows = [row(path) for path in sorted(out.glob("*/*/s*/*/summary.json"))]
     print("| task | variant | seed | best | held-out | samples | by generator | simplified lines | parameters | seconds |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
