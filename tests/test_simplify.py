@@ -437,6 +437,38 @@ def test_a_static_pass_that_changes_scores_is_not_used():
     assert result.code == code and result.steps == () and result.scores == Scores(10.0, 10.0)
 
 
+@pytest.mark.parametrize("code, expected", [
+    ("def policy(obs):\n    x = 0.0\n    x += obs[2]\n    return x", "def policy(obs):\n    x = obs[2]\n    return x"),
+    ("def policy(obs):\n    x = 0\n    x -= obs[2]\n    return x", "def policy(obs):\n    x = -obs[2]\n    return x"),
+    ("def policy(obs):\n    x = 1.0\n    x *= obs[2]\n    return x", "def policy(obs):\n    x = obs[2]\n    return x"),
+], ids=["add", "subtract", "multiply"])
+def test_an_accumulator_started_from_its_identity_is_written_as_its_one_term(code, expected):
+    cleaned = remove_dead_code(code)
+    assert _same(cleaned, expected), cleaned
+
+
+@pytest.mark.parametrize("code", [
+    "def policy(obs):\n    x = 0.0\n    x += obs\n    x[0] = 1.0\n    return x[1]",  # x would be obs itself, then changed
+    "def policy(obs):\n    x = 0.0\n    x += obs\n    x += obs\n    return x[1]",
+    "def policy(obs):\n    x = 0.0\n    for v in obs:\n        x += v\n    return x",
+    "def policy(obs):\n    x = 0.0\n    x += x + obs[0]\n    return x",
+    "def policy(obs):\n    x = 2.0\n    x += obs[0]\n    return x",
+], ids=["changed in place", "updated twice", "in a loop", "reads itself", "not the identity"])
+def test_an_accumulator_that_is_not_just_its_one_term_stays(code):
+    assert _same(remove_dead_code(code), code)
+
+
+def test_the_simplified_program_writes_its_constants_to_4_significant_digits():
+    code = "import numpy as np\n\ndef policy(obs):\n    return np.pi / 6.512 * obs[0]"
+
+    def score_batch(codes):  # every deletion costs the score; the constant's last digits do not
+        return [Scores(1.0, 1.0) if "* obs[0]" in c else Scores(0.0, 0.0) for c in codes]
+
+    result = simplify(code, scoring(score_batch))
+    assert _same(result.code, "def policy(obs):\n    return 0.4824 * obs[0]"), result.code
+    assert result.steps[-1].description == "constants written to 4 significant digits"
+
+
 def test_a_failing_program_cannot_be_simplified():
     with pytest.raises(ProgramFails, match="fails on the training episodes"):
         simplify(SUM_OF_TERMS, scoring(lambda codes: [Scores(-math.inf, -math.inf) for _ in codes]))

@@ -22,7 +22,7 @@ from typing import Iterator, Optional
 
 from colmo import astutil
 from colmo.astutil import bindings, strip_docstrings
-from colmo.simplify.fold import Fold
+from colmo.simplify.fold import Fold, fold_accumulator_starts
 from colmo.simplify.scope import Scope
 
 BLOCKS = ("body", "orelse", "finalbody")
@@ -348,6 +348,7 @@ def remove_dead_code(code: str, function_name: str = "policy") -> str:
     strip_docstrings(tree)
     before = ast.dump(tree)
     for _ in range(100):  # each pass only removes; the bound is a guard
+        fold_accumulator_starts(tree)
         scope = Scope(tree)
         tree = Fold(scope).visit(tree)
         tree.body = _Statements(scope).block(tree.body, keep_empty=True)

@@ -1,8 +1,10 @@
 """Constant folding: numeric subexpressions whose operands are all literals become one literal.
 
 `np.abs(4.4)` -> `4.4`, `2.0 * 3.0` -> `6.0`, `np.pi / 6` -> one literal, `2 > 1` -> `True`,
-`x if True else y` -> `x`; and `-(-x)` -> `x` where only the value is used (an operand of
-arithmetic or of a comparison). Folding evaluates only literals, with the trusted functions of
+`x if True else y` -> `x`; `-(-x)` -> `x` where only the value is used (an operand of
+arithmetic or of a comparison); and an accumulator started from its identity element,
+`x = 0.0` then `x += e` (`-=`, or `x = 1.0` then `x *= e`), written `x = e` (`-e`) where nothing
+later changes `x` in place (so `x` may be `e` itself). Folding evaluates only literals, with the trusted functions of
 `colmo.simplify.scope.FOLDABLE` (never `exec`/`eval`), and follows Python's number semantics,
 so integer literals (indices, sizes) stay integers. What would raise or warn at run time
 (`1.0 / 0.0`, `np.log(0.0)`), overflow, or give something other than a finite number of
@@ -12,6 +14,7 @@ modest size is left for the program to do.
 from __future__ import annotations
 
 import ast
+import collections
 import math
 import operator
 from typing import Callable, Optional
@@ -120,3 +123,41 @@ class Fold(ast.NodeTransformer):
         if isinstance(node.test, ast.Constant):
             return node.body if node.test.value else node.orelse
         return node
+
+
+_IDENTITIES = {ast.Add: 0, ast.Sub: 0, ast.Mult: 1}
+
+
+def fold_accumulator_starts(tree: ast.Module) -> None:
+    """`x = 0.0; x += e` -> `x = e` (module docstring), in every block of `tree`."""
+    augmented = collections.Counter(
+        node.target.id for node in ast.walk(tree) if isinstance(node, ast.AugAssign) and isinstance(node.target, ast.Name)
+    )
+    # Changed in place beyond the one update folded: `x` would then change `e` itself.
+    changed_in_place = {name for name, count in augmented.items() if count > 1} | {
+        target.value.id for node in ast.walk(tree) for target in getattr(node, "targets", [getattr(node, "target", None)])
+        if isinstance(target, (ast.Subscript, ast.Attribute)) and isinstance(target.value, ast.Name)
+    }
+    for node in ast.walk(tree):
+        for field in ("body", "orelse", "finalbody"):
+            block = getattr(node, field, None)
+            if isinstance(block, list):
+                setattr(node, field, _folded_block(block, changed_in_place))
+
+
+def _folded_block(block: list[ast.stmt], changed_in_place: set[str]) -> list[ast.stmt]:
+    folded: list[ast.stmt] = []
+    for statement in block:
+        start = folded[-1] if folded else None
+        if (
+            isinstance(statement, ast.AugAssign) and isinstance(statement.target, ast.Name) and type(statement.op) in _IDENTITIES
+            and isinstance(start, ast.Assign) and len(start.targets) == 1 and isinstance(start.targets[0], ast.Name)
+            and start.targets[0].id == statement.target.id and statement.target.id not in changed_in_place
+            and is_number_literal(start.value) and ast.literal_eval(start.value) == _IDENTITIES[type(statement.op)]
+            and statement.target.id not in {n.id for n in ast.walk(statement.value) if isinstance(n, ast.Name)}
+        ):
+            value = ast.UnaryOp(ast.USub(), statement.value) if isinstance(statement.op, ast.Sub) else statement.value
+            folded[-1] = ast.Assign([ast.Name(statement.target.id, ast.Store())], value)
+            continue
+        folded.append(statement)
+    return folded

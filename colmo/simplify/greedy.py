@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Sequence
 
 from colmo import astutil
-from colmo.program import ProgramSize, measure, parametrize
+from colmo.program import DISPLAY_DIGITS, ProgramSize, instantiate, measure, parametrize
 from colmo.record import finite_or_none
 from colmo.simplify.candidates import Candidate, deletion_candidates
 from colmo.simplify.deadcode import remove_dead_code
@@ -246,12 +246,29 @@ def simplify(
                     current, scores, retuned = tuned, tuned_scores, True
                     steps.append(Step("re-tuned the constants", current, scores, measure(current)))
 
+    readable = readable_constants(current, function_name)
+    if readable != current and not stop():
+        readable_scores = scorer.both([readable])[0]
+        if rule.accepts(readable_scores):
+            current, scores = readable, readable_scores
+            steps.append(Step(f"constants written to {DISPLAY_DIGITS} significant digits", current, scores, measure(current)))
+
     return SimplifyResult(
         code_initial=code, code=current, scores_initial=scores_initial, scores=scores,
         size_initial=measure(code), size=measure(current), steps=tuple(steps),
         programs_scored=len(scorer.train_scores), heldout_scored=len(scorer.heldout_scores), rounds=rounds,
         static_pass_confirmed=confirmed, retuned=retuned, seconds=time.perf_counter() - start,
     )
+
+
+def readable_constants(code: str, function_name: str = "policy") -> str:
+    """`code` with its tunable constants written to `DISPLAY_DIGITS` significant digits (a folded
+    `np.pi / 6.512` is `0.4824313042981869` otherwise); the caller scores it before keeping it."""
+    program = parametrize(code, function_name)
+    if not program.n_params:
+        return code
+    readable = instantiate(program.skeleton, program.values, digits=DISPLAY_DIGITS)
+    return code if _same_code(readable, instantiate(program.skeleton, program.values)) else readable
 
 
 def _best_deletion(
