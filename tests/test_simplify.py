@@ -469,6 +469,15 @@ def test_the_simplified_program_writes_its_constants_to_4_significant_digits():
     assert result.steps[-1].description == "constants written to 4 significant digits"
 
 
+def test_an_inverted_clip_is_replaced_by_the_constant_it_returns():
+    # The disguise: a clip whose lower limit exceeds its upper one reads as a controller.
+    code = "import numpy as np\n\ndef policy(obs):\n    torque = 3.771 * obs[1] / (obs[2] ** 2 + 0.5)\n    return np.clip(torque, 1.744, -0.8151)"
+    result = simplify(code, trusted_scoring(train=[0, 1], heldout=[2], steps=200))
+    assert _same(result.code, "def policy(obs):\n    return -0.8151"), result.code
+    assert any("exceeds its upper one" in step.description for step in result.steps)
+    assert result.scores == result.scores_initial
+
+
 def test_a_failing_program_cannot_be_simplified():
     with pytest.raises(ProgramFails, match="fails on the training episodes"):
         simplify(SUM_OF_TERMS, scoring(lambda codes: [Scores(-math.inf, -math.inf) for _ in codes]))

@@ -134,6 +134,12 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
             for i, value in enumerate(node.values):
                 yield node, f"kept only `{_short(value)}` of `{_short(node, 40)}` at {where}", replace_with(lambda n, i=i: n.values[i])
         elif isinstance(node, ast.Call):
+            inverted = _inverted_clip(node)
+            if inverted is not None:
+                low, high = inverted
+                yield node, f"replaced `{_short(node)}` at {where}, whose lower limit {low:g} exceeds its upper one, by {high:g}, all it returns", replace_with(
+                    lambda n: n.args[2]
+                )
             for i, argument in enumerate(node.args):
                 if not is_number_literal(argument) and not isinstance(argument, ast.Starred):
                     yield node, f"unwrapped `{_short(node)}` to `{_short(argument)}` at {where}", replace_with(lambda n, i=i: n.args[i])
@@ -142,6 +148,16 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
         if not covered and not is_number_literal(node) and not isinstance(node, ast.Constant):
             for value in (0.0, 1.0):
                 yield node, f"replaced `{_short(node)}` by {value} at {where}", replace_with(lambda n, value=value: ast.Constant(value))
+
+
+def _inverted_clip(node: ast.Call) -> Optional[tuple[float, float]]:
+    """`(low, high)` of `np.clip(x, low, high)` (or `clip`) with literal limits and `low > high`:
+    numpy then returns `high` whatever `x` is."""
+    name = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", None)
+    if name != "clip" or len(node.args) != 3 or node.keywords or not all(is_number_literal(a) for a in node.args[1:]):
+        return None
+    low, high = (ast.literal_eval(a) for a in node.args[1:])
+    return (low, high) if low > high else None
 
 
 _MERGED_DIGITS = 6  # significant digits of a merged constant: 6.2846, not 6.284600000000001
