@@ -10,7 +10,7 @@ still ends its candidate and scores its rounded constants on the fast path and b
 So the reserve is for the programs actually in flight, not for a full queue, and a batch is only
 generated (its generation abandoned otherwise) while the run can still drain it
 (`can_start`): near the end the queue empties instead of the whole run stopping a full queue's
-drain early (a 60 s quadruped run used to reserve so much that it searched nothing).
+drain early.
 
 What the drain and the finish cost is measured on the programs themselves: each program's
 final scores (`observe`: the worker seconds of its rounded constants' fast-path and referee
@@ -19,8 +19,7 @@ finish's referee evaluations are the starter's calibration (its fast path: the e
 cost; the referee's excess: a lockstep batch's round trips) scaled by how much dearer the
 programs' referee evaluations are. Until a program is in, the calibration stands in, scaled by
 how much slower the workers' recent evaluations run than the calibration's (`load_factor`, at
-least 1): a calibration is a few seconds of a machine whose load changes (2 cores shared with
-other jobs measured evaluations 2-4 times slower than their calibration a minute earlier).
+least 1): a calibration is a few seconds of a machine whose load changes.
 """
 
 from __future__ import annotations

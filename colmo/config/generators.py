@@ -129,10 +129,8 @@ class LlamaCppConfig(LanguageModelConfig):
     """In-process llama.cpp on the CPU (pip install 'colmo[llamacpp]'): a GGUF model loaded once per run."""
 
     name: str = "llamacpp"
-    # Chat, as for the servers: in completion form the 1.5B model in process mostly continued with
-    # the shown program again (median 14 tokens, 71-77% duplicates, issue 19); its chat answers
-    # cost more tokens and are invalid more often, but are new programs far more often
-    # (docs/llm-duplicates.md: programs evaluated per model call, both forms).
+    # Chat, as for the servers: in completion form the 1.5B model in process mostly repeats the
+    # shown program (docs/llm-duplicates.md: programs evaluated per model call, both forms).
     prompt_format: str = option("chat", "chat: the prompt's messages through the GGUF's chat template; completion: the prompt text for the model to continue")
     model_path: Optional[str] = option(None, "a local GGUF file")
     repo_id: Optional[str] = option(

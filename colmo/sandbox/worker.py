@@ -60,8 +60,7 @@ _CHILD_EXITS = {
 
 # Tasks (spec and environment options) whose simulators a worker keeps: a search uses one or two
 # (training and held-out episodes share theirs), a robustness report one per grid point (about
-# 36). Keeping them all (up to 16 simulators each) took a worker past its address-space limit: every
-# grid point after the held-out score failed to build its environment ("Could not allocate memory").
+# 36); all of them, up to 16 simulators each, would not fit a worker's address-space limit.
 KEPT_TASKS = 4
 
 
@@ -175,9 +174,8 @@ class Worker:
 def _on_this_cpu() -> Iterator[None]:
     """The worker, and the child it forks meanwhile (which inherits the mask), kept on the CPU the
     worker is on for one lockstep exchange, then free again. The two hand a frame back and forth
-    at every control step and never run at once; on two CPUs each hand-over wakes the other CPU
-    (measured on an idle 2-core machine: referee 0.39 s against 0.12 s on one CPU for the
-    pendulum's 10 episodes, docs/referee-cost.md). Where the mask cannot be set, nothing changes."""
+    at every control step and never run at once; on two CPUs each hand-over would wake the other
+    CPU (docs/referee-cost.md). Where the mask cannot be set, nothing changes."""
     try:
         allowed = os.sched_getaffinity(0)
         cpu = _LIBC.sched_getcpu()
