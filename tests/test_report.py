@@ -44,7 +44,9 @@ def log_run(client, experiment_id, index: int, run: Logged, *overrides: str, sta
     for batch, best in enumerate(run.best):
         step = 4 * (batch + 1)
         values = {"best_score": best, "best_score_island_0": best, "best_score_island_1": best / 2, "evaluations": 10.0 * step, "samples": step,
-                  "worker_seconds": 3.0 * step}
+                  "worker_seconds": 3.0 * step, "programs_evaluated": step * (0.75 if run.method == "none" else 0.5)}
+        if run.method == "oneplusone":  # a search of two generators (search.fill): each one's calls and programs
+            values |= {"samples_mutate": 0.75 * step, "programs_evaluated_mutate": 0.25 * step}
         if seconds:
             values["seconds"] = 2.0 * step
         metrics += [Metric(key, value, START, step) for key, value in values.items()]
@@ -128,6 +130,16 @@ def test_a_difference_whose_interval_holds_0_is_said_to_be_none():
     assert difference([201.3, 180.0], [222.8, 190.0]).text().endswith(": no significant difference")
     assert not difference([201.3, 180.0], [222.8, 190.0]).significant
     assert difference([187.4, 196.5, 176.4], [392.5, 221.6, 502.2]).low > 0
+
+
+def test_the_model_calls_that_yield_a_program_are_counted_per_variant_and_generator(store, monkeypatch):
+    cwd, _ = store
+    rows = table(report(cwd, monkeypatch, "out=yield"), "Model calls that yield a program")
+    assert rows[0] == ["Variant", "Generator", "Programs per 100 model calls", "Per seed"]
+    by_variant = {(row[0], row[1]): row[2:] for row in rows[1:]}
+    assert by_variant[("no GFO", "all")] == ["75.0 ± 0.0", "75.0, 75.0"]
+    assert by_variant[("oneplusone, budget 3", "all")] == ["50.0 ± 0.0", "50.0, 50.0"]
+    assert by_variant[("oneplusone, budget 3", "mutate")] == ["33.3 ± 0.0", "33.3, 33.3"]
 
 
 def test_every_run_is_accounted_for(store, monkeypatch):

@@ -50,7 +50,16 @@ from mlflow import MlflowClient
 from colmo.comparison import CONFIDENCE
 from colmo.report.figure import budget_note, figure
 from colmo.report.selection import AXES, LATEST, group, read_runs
-from colmo.report.tables import best_policies, comparison_table, generation_table, left_out_lines, mean_std, runs_table, table_one
+from colmo.report.tables import (
+    best_policies,
+    comparison_table,
+    generation_table,
+    left_out_lines,
+    mean_std,
+    runs_table,
+    table_one,
+    yield_table,
+)
 from colmo.store import BEST_SO_FAR_PLOT
 
 __all__ = ["AXES", "default_out", "mean_std", "read_runs", "write_report"]
@@ -134,6 +143,12 @@ def write_report(
         "## Runs",
         "",
         *runs_table(tasks),
+        "",
+        "## Model calls that yield a program",
+        "",
+        "Of each run's model calls (duplicates generated again included), how many gave a program that was evaluated.",
+        "",
+        *yield_table(tasks),
         "",
         "## Generation and evaluation",
         "",

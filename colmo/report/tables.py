@@ -173,6 +173,28 @@ def generation_table(tasks: dict[str, list[Variant]]) -> list[str]:
     return lines
 
 
+def _per_100_calls(run: RunCurves, generator: str = "") -> Optional[float]:
+    """Programs evaluated per 100 model calls (of `generator`'s, in a search of several)."""
+    metrics, suffix = run.run.data.metrics, f"_{generator}" if generator else ""
+    calls, programs = metrics.get(f"samples{suffix}"), metrics.get(f"programs_evaluated{suffix}")
+    return None if not calls or programs is None else 100.0 * programs / calls
+
+
+def yield_table(tasks: dict[str, list[Variant]]) -> list[str]:
+    """Per variant, the model calls that yield an evaluated program: per 100 calls, mean ± std
+    over its seeds and each seed; for a search of several generators (`search.fill`), each one's."""
+    lines = ["| Variant | Generator | Programs per 100 model calls | Per seed |", "|---|---|---|---|"]
+    for variants in tasks.values():
+        for variant in variants:
+            generators = sorted({name[len("samples_"):] for run in variant.runs for name in run.run.data.metrics if name.startswith("samples_")})
+            for generator in ["", *generators]:
+                values = [_per_100_calls(run, generator) for run in variant.runs]
+                known = [value for value in values if value is not None]
+                seeds = ", ".join("—" if value is None else f"{value:.1f}" for value in values)
+                lines.append(f"| {variant.name} | {generator or 'all'} | {mean_std(known) if known else '—'} | {seeds} |")
+    return lines
+
+
 def left_out_lines(left_out: list[tuple[Run, str]]) -> list[str]:
     if not left_out:
         return ["None: every search run of the experiment(s) counts."]
