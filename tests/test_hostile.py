@@ -235,6 +235,9 @@ HOSTILE = {
     "buffer keyword": (policy_doing("a = np.zeros(1).view()\n    b = np.asarray(a, like=a)\n    c = np.recarray((1,), buf=a, formats='f8')"), "forbidden: .recarray"),
     "resize under a view": (policy_doing("a = np.zeros(10 ** 6)\n    v = a[:]\n    a.resize(1, refcheck=False)\n    v[:] = 1"), "forbidden: .resize"),
     # str() of its exception raises (too many digits to print): once the child crashed ("exited with code 70")
+    # the bytes of an array of objects are their addresses (issue 33 finding 5)
+    "bytes of an object array": (policy_doing("bytes(np.array([None, obs[0]]))"), "exception: TypeError: bytes() of an array of objects is refused"),
+    "bytearray of an object array": (policy_doing("bytearray(np.array([None, 1.0]))"), "exception: TypeError: bytearray() of an array of objects is refused"),
     "unprintable exception": (policy_doing("raise ValueError(10 ** 5000)"), "exception: ValueError: (its message cannot be printed: ValueError) (step 0)"),
     "decorator rebinding": ("import numpy as np\n@(lambda f: np.poly1d)\ndef policy(obs):\n    pass\npolicy.x = 1\n", "forbidden: decorator on policy"),
 }

@@ -39,14 +39,30 @@ def _discard(*args: object, **kwargs: object) -> None:
 
 
 _SAFE_BUILTIN_NAMES = (
-    "abs", "all", "any", "ascii", "bin", "bool", "bytearray", "bytes", "callable", "chr", "complex",
+    "abs", "all", "any", "ascii", "bin", "bool", "callable", "chr", "complex",
     "dict", "divmod", "enumerate", "filter", "float", "format", "frozenset", "hasattr", "hash", "hex",
     "int", "isinstance", "issubclass", "iter", "len", "list", "map", "max", "min", "next", "oct",
     "ord", "pow", "range", "repr", "reversed", "round", "set", "slice", "sorted", "str", "sum",
     "tuple", "zip", "Ellipsis", "NotImplemented",
 )
+
+
+def _without_object_buffers(kind: type) -> Callable[..., Any]:
+    """`bytes` or `bytearray`, refusing an array that holds objects: its buffer is their
+    addresses (`np.array([None, x])` is such an array), half of every raw-memory escape."""
+
+    def make(*args: Any, **kwargs: Any) -> Any:
+        if args and isinstance(args[0], np.ndarray) and args[0].dtype.hasobject:
+            raise TypeError(f"{kind.__name__}() of an array of objects is refused: its bytes are their addresses")
+        return kind(*args, **kwargs)
+
+    return make
+
+
 _SAFE_BUILTINS: dict[str, Any] = {
     **{name: getattr(builtins, name) for name in _SAFE_BUILTIN_NAMES},
+    "bytes": _without_object_buffers(bytes),
+    "bytearray": _without_object_buffers(bytearray),
     # Exception classes, so that programs can raise and catch them.
     **{name: value for name, value in vars(builtins).items() if isinstance(value, type) and issubclass(value, BaseException)},
     "print": _discard,
