@@ -681,3 +681,24 @@ def test_a_fast_path_the_referee_refutes_is_tampering_unless_the_referee_cannot_
     judgement = judged(referee, fast, again=lambda: Evaluation(again))
     assert judgement.failure.startswith(verdict) and judgement.returns == referee.returns
     assert judged(referee, Evaluation((3.0, 4.0)), again=lambda: pytest.fail("asked again")) is referee
+
+
+def test_a_policy_process_that_outlives_the_referees_quit_is_killed_and_failed(sandbox, baseline, escaped_spec):
+    # An escaped program makes its process sleep instead of exiting once the referee says quit.
+    lingers = "import sys\nsys.modules['builtins'].setattr(sys.modules['os'], '_exit', lambda code: sys.modules['time'].sleep(600))\n" + NOTHING
+    evaluation = sandbox.evaluate(lingers, spec=escaped_spec, imports=("numpy", "math", "os", "sys", "ctypes", "socket"), mode=REFEREE)
+    assert evaluation.failure == "tampering: the policy process outlived the referee's quit message", evaluation.failure
+    assert_unharmed(sandbox, baseline)
+
+
+def test_an_oversize_frame_is_named_as_the_protocol_break_it_is(sandbox, baseline, escaped_spec):
+    # The policy's process writes a frame header announcing 2 MB straight to the referee's pipe.
+    oversize = (
+        "import os\nimport sys\n\ndef policy(obs):\n"
+        "    for fd in range(3, 64):\n"
+        "        try:\n            os.write(fd, b'A' + (1 << 21).to_bytes(4, 'little'))\n        except OSError:\n            pass\n"
+        "    return 0.0\n"
+    )
+    evaluation = sandbox.evaluate(oversize, spec=escaped_spec, imports=("numpy", "math", "os", "sys", "ctypes", "socket"), mode=REFEREE)
+    assert evaluation.failure.startswith("tampering: the policy process broke the referee protocol: frame of 2097152 bytes"), evaluation.failure
+    assert_unharmed(sandbox, baseline)

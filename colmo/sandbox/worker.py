@@ -50,6 +50,7 @@ _CLONE_NEWUSER, _CLONE_NEWNET = 0x10000000, 0x40000000
 _LIBC = ctypes.CDLL(None, use_errno=True)
 _MAX_REPLY_BYTES = 1 << 20
 _EXIT_GRACE_S = 1.0
+_QUIT_GRACE_S = 3.0  # a referee's policy child, told to quit, exits at once: past this it is killed
 _CHILD_EXITS = {
     signal.SIGKILL: "crash: the evaluation process was killed (SIGKILL): out of memory, or killed from outside",
     signal.SIGXCPU: "cpu time: the evaluation exceeded its CPU time limit",
@@ -154,19 +155,28 @@ class Worker:
         pid = _fork_child(request, keep=(observations_read, actions_write), run=serve)
         os.close(observations_read)
         os.close(actions_write)
-        evaluation, timed_out = None, False
+        evaluation, timed_out, broken = None, False, ""
         try:
             evaluation = referee_evaluation(envs, request, actions_read, observations_write, deadline)
         except RefereeTimeout:
             timed_out = True
-        except (EOFError, OSError, ValueError):  # the child died or broke the protocol
+        except ValueError as error:  # an oversize or malformed frame
+            broken = f"tampering: the policy process broke the referee protocol: {error}"
+        except (EOFError, OSError):  # the child died, or closed its end
             pass
         finally:
             os.close(actions_read)
             os.close(observations_write)
-        failure = _reap(pid, request, deadline, timed_out)
-        if evaluation is None:
+        if evaluation is None and not broken:
+            failure = _reap(pid, request, deadline, timed_out)
             return Evaluation(failure=failure or "tampering: the policy process broke the referee protocol")
+        # Done with the child: told to quit (or cut off), it has a few seconds to be gone, not
+        # the request's whole time limit.
+        failure = _reap(pid, request, time.monotonic() + _QUIT_GRACE_S, timed_out=False)
+        if broken:
+            return Evaluation(failure=broken)
+        if failure is not None and failure.startswith("timeout:"):  # it had to be killed
+            return Evaluation(evaluation.returns, "tampering: the policy process outlived the referee's quit message", evaluation.steps)
         return evaluation
 
 
