@@ -3,7 +3,8 @@ and the difference of their means with a bootstrap confidence interval (`scipy.s
 resampling each variant's seeds on its own). A difference is *significant* only when its
 interval leaves out 0; with fewer than two seeds a side there is no interval, and nothing is
 called significant. The end-of-sweep table (`colmo.sweep_comparison`) and `colmo-report` both
-say it this way, so neither announces a winner whose spread overlaps the other's.
+say it this way, so neither announces a winner whose spread overlaps the other's. `half_width`
+is the interval of one mean (a robustness report's points, `colmo.robustness`).
 """
 
 from __future__ import annotations
@@ -23,6 +24,15 @@ def mean_std(values: Sequence[float], digits: int = 1) -> str:
     if len(values) == 1:
         return f"{values[0]:.{digits}f}"
     return f"{statistics.mean(values):.{digits}f} ± {statistics.stdev(values):.{digits}f}"
+
+
+def half_width(values: Sequence[float]) -> Optional[float]:
+    """Half the `CONFIDENCE` interval of the mean of `values` (Student's t; None for fewer than two)."""
+    from scipy.stats import t  # scipy only where an interval is made
+
+    if len(values) < 2:
+        return None
+    return float(t.ppf((1 + CONFIDENCE) / 2, len(values) - 1) * statistics.stdev(values) / np.sqrt(len(values)))
 
 
 @dataclass(frozen=True)

@@ -16,13 +16,11 @@ from __future__ import annotations
 import csv
 import json
 import math
-import statistics
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
-from scipy import stats
-
+from colmo.comparison import CONFIDENCE, half_width
 from colmo.config import PerturbConfig
 from colmo.environments.perturb import PERTURB_OPTION, with_perturbation
 from colmo.evaluation import Evaluation, Evaluator
@@ -31,14 +29,6 @@ FACTORS = ("mass", "damping", "frictionloss", "friction", "gain", "obs_noise", "
 ALL = "all"
 FILES = ("robustness.json", "robustness.csv", "robustness.png")  # what `save` writes
 HEADLINE_MAGNITUDE = 0.1  # `headline` quotes every factor together at this magnitude
-CONFIDENCE = 0.95  # of each point's interval
-
-
-def half_width(values: Sequence[float]) -> Optional[float]:
-    """Half the `CONFIDENCE` interval of the mean of `values` (None for fewer than two)."""
-    if len(values) < 2:
-        return None
-    return float(stats.t.ppf((1 + CONFIDENCE) / 2, len(values) - 1) * statistics.stdev(values) / math.sqrt(len(values)))
 
 
 @dataclass(frozen=True)
@@ -74,7 +64,7 @@ class RobustnessReport:
 
     @property
     def nominal_score(self) -> Optional[float]:
-        return Point("nominal", 0.0, self.nominal).score
+        return self.point(ALL, 0.0).score
 
     def point(self, factor: str, magnitude: float) -> Point:
         if magnitude == 0:
@@ -86,7 +76,7 @@ class RobustnessReport:
 
     def entries(self, value: Callable[[Point], Optional[float]] = lambda point: point.score) -> list[dict]:
         """One entry per magnitude, nominal (0) first: the score of each factor and of all
-        together (or `value` of each point: `intervals`)."""
+        together (or `value` of each point, e.g. its interval)."""
         return [{"magnitude": m, **{name: value(self.point(name, m)) for name in (*FACTORS, ALL)}} for m in (0.0, *self.magnitudes)]
 
     def delay_entries(self, value: Callable[[Point], Optional[float]] = lambda point: point.score) -> list[dict]:
