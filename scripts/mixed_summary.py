@@ -9,9 +9,10 @@ samples, each generator's share, and the simplified winner's lines and parameter
 from __future__ import annotations
 
 import json
-import statistics
 import sys
 from pathlib import Path
+
+from colmo.comparison import mean_std
 
 
 def row(path: Path) -> dict:
@@ -46,8 +47,7 @@ def main(out: Path) -> None:
         group = [r for r in rows if (r["task"], r["variant"]) == key]
         best = [r["best"] for r in group]
         heldout = [r["heldout"] for r in group if r["heldout"] is not None]
-        spread = lambda xs: f"{statistics.mean(xs):.1f} ± {statistics.stdev(xs):.1f}" if len(xs) > 1 else (f"{xs[0]:.1f}" if xs else "-")  # noqa: E731
-        print(f"| {key[0]} | {key[1]} | {len(group)} | {spread(best)} | {spread(heldout)} |")
+        print(f"| {key[0]} | {key[1]} | {len(group)} | {mean_std(best)} | {mean_std(heldout) if heldout else '-'} |")
 
 
 if __name__ == "__main__":

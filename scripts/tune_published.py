@@ -18,6 +18,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from colmo.comparison import mean_std
+
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 
@@ -45,7 +47,7 @@ def summary(out: Path) -> str:
             if not results:
                 continue
             heldout = [result["heldout_score"] for result in results]
-            spread = f"{statistics.mean(heldout):.1f} ± {statistics.stdev(heldout):.1f}" if len(heldout) > 1 else f"{heldout[0]:.1f}"
+            spread = mean_std(heldout)
             training = ", ".join(f"{result['score']:.1f}" for result in results)
             lines.append(
                 f"| {task_dir.name} | {method_dir.name} | {results[0]['score_initial']:.1f} "
