@@ -17,7 +17,7 @@ import collections
 import math
 import time
 from dataclasses import asdict, astuple, dataclass, field, replace
-from typing import TYPE_CHECKING, Any, Iterable, Mapping, Optional, Protocol
+from typing import TYPE_CHECKING, Any, Mapping, Optional, Protocol
 
 from colmo.generate.base import Generation
 
@@ -186,8 +186,8 @@ class Summary(Totals):
     # then the search's own seconds, from its first batch to its stop (the finish follows).
     startup_seconds: float = 0.0
     search_seconds: float = 0.0
-    # Per generator (`mutate`, `llamacpp`, ...: a generator label up to its first colon; the
-    # spec's starter aside): model calls, programs evaluated and the best training score.
+    # Per generator (`mutate`, `llamacpp`, ...: `Counters.by_generator`): model calls, programs
+    # evaluated and the best training score.
     by_generator: dict = field(default_factory=dict)
 
     @property
@@ -203,21 +203,6 @@ class Summary(Totals):
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
-
-
-def by_generator(records: Iterable[SampleRecord]) -> dict[str, dict[str, Any]]:
-    """What each generator of a search contributed (`Summary.by_generator`), by generator name."""
-    split: dict[str, dict[str, Any]] = {}
-    for record in records:
-        name = record.generator.split(":", 1)[0]
-        if name == "spec":
-            continue
-        entry = split.setdefault(name, {"samples": 0, "programs_evaluated": 0, "best_score": None})
-        entry["samples"] += record.model_calls
-        if record.status == EVALUATED:
-            entry["programs_evaluated"] += 1
-            entry["best_score"] = record.score if entry["best_score"] is None else max(entry["best_score"], record.score)
-    return split
 
 
 def shortfall(stop_reason: str, samples: int, programs_evaluated: int) -> Optional[str]:
@@ -268,8 +253,16 @@ class Counters:
     steps: int = 0
     completion_tokens: int = 0
     generation_seconds: float = 0.0  # the stored samples' own generation time (for tokens/s)
+    # Per generator, by its label up to the first colon (`llamacpp:<model>` is `llamacpp`): model
+    # calls, programs evaluated, the best training score; what a search of several (`search.fill`) splits.
+    by_generator: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def count(self, record: SampleRecord) -> None:
+        entry = self.by_generator.setdefault(record.generator.split(":", 1)[0], {"samples": 0, "programs_evaluated": 0, "best_score": None})
+        entry["samples"] += record.model_calls
+        if record.status == EVALUATED:
+            entry["programs_evaluated"] += 1
+            entry["best_score"] = record.score if entry["best_score"] is None else max(entry["best_score"], record.score)
         self.samples += record.model_calls
         self.records += 1
         self.duplicate_answers += record.model_calls - 1 + (record.status == DUPLICATE)

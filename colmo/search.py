@@ -72,7 +72,6 @@ from colmo.record import (
     SearchObserver,
     Summary,
     Totals,
-    by_generator,
 )
 from colmo.sampler import POLL_S, Sampler
 from colmo.signals import stop_signals
@@ -166,7 +165,7 @@ class Search:
             best_program = self.database.best if self.database else None
             summary = best.summary(
                 self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals(), *self.budget.phases(),
-                by_generator=by_generator(self.store.records()),
+                by_generator=self.counters.by_generator,
             )
             write_outputs(summary, self.run_dir)
             for observer in self.observers:
