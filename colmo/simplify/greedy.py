@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Sequence
 
 from colmo import astutil
-from colmo.program import DISPLAY_DIGITS, ProgramSize, instantiate, measure, parametrize
+from colmo.program import DISPLAY_DIGITS, ProgramSize, instantiate, measure, parametrize, round_significant
 from colmo.record import finite_or_none
 from colmo.simplify.candidates import Candidate, deletion_candidates
 from colmo.simplify.deadcode import remove_dead_code
@@ -265,10 +265,9 @@ def readable_constants(code: str, function_name: str = "policy") -> str:
     """`code` with its tunable constants written to `DISPLAY_DIGITS` significant digits (a folded
     `np.pi / 6.512` is `0.4824313042981869` otherwise); the caller scores it before keeping it."""
     program = parametrize(code, function_name)
-    if not program.n_params:
+    if round_significant(program.values) == tuple(program.values):  # already as readable (or none)
         return code
-    readable = instantiate(program.skeleton, program.values, digits=DISPLAY_DIGITS)
-    return code if _same_code(readable, instantiate(program.skeleton, program.values)) else readable
+    return instantiate(program.skeleton, program.values, digits=DISPLAY_DIGITS)
 
 
 def _best_deletion(
