@@ -31,7 +31,8 @@ def row(path: Path) -> dict:
 
 
 def main(out: Path) -> None:
-    rows = [row(path) for path in sorted(out.glob("*/*/s*/*/summary.json"))]
+    # A run stopped before its 30 minutes (Ctrl-C, a killed session) is resumed, not reported.
+    rows = [r for r in (row(path) for path in sorted(out.glob("*/*/s*/*/summary.json"))) if r["stop"] in ("max_seconds", "max_samples")]
     print("| task | variant | seed | best | held-out | samples | by generator | simplified lines | parameters | seconds |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
