@@ -1,9 +1,12 @@
 """The closed-loop rollout that scores a policy, and the episode seeds of a run.
 
-`evaluate_program` runs a fresh instance of a policy for each of a list of episode seeds and
-returns the per-episode returns, or the reason it failed; it never raises for anything the
-policy does. `as_action` is the one check of what a policy returns. `episode_seeds` and
-`heldout_seeds` name the training and held-out episodes of a run.
+`Episodes` holds the one episode loop (seeding, reset, step, reward sum, end check, failure
+order, racing), which both scoring paths drive: `evaluate_program`, the fast path, runs a fresh
+instance of a policy in process for each of a list of episode seeds and returns the per-episode
+returns, or the reason it failed (it never raises for anything the policy does); the referee
+(`colmo.sandbox.referee`) steps the same loop with the actions its confined child sends. `act`
+and `as_action` are the one check of what a policy returns. `episode_seeds` and `heldout_seeds`
+name the training and held-out episodes of a run.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from colmo.environments.base import Environment, PolicyFailure
 from colmo.errors import describe_exception
 from colmo.evaluation import Evaluation
 from colmo.racing import Race
+from colmo.trace import TraceRecorder
 
 Policy = Callable[[np.ndarray], object]
 
@@ -100,22 +104,102 @@ def act(policy: Policy, obs: np.ndarray, action_size: int, step: int) -> np.ndar
         raise PolicyFailure(f"{failure} (step {step})") from None
 
 
+class Episode:
+    """One episode in its environment: `np.random` seeded and the environment reset by the
+    episode's seed; `Episodes.run` steps it and sums its rewards in `total`."""
+
+    __slots__ = ("index", "env", "obs", "total")
+
+    def __init__(self, index: int, env: Environment, seed: int):
+        # Policies may draw from np.random (the paper's quadruped policy adds noise), and so may
+        # an environment's reset: seeding it per episode keeps the objective a deterministic
+        # function of the parameters.
+        np.random.seed(seed % 2**32)
+        self.index, self.env, self.total = index, env, 0.0
+        self.obs = env.reset(seed)
+
+
+Actions = Callable[[list[Episode], int], Sequence[np.ndarray]]
+
+
+class Episodes:
+    """The episodes of one evaluation, one per seed, and what running them one after another in
+    seed order gives: the first failing episode fails the evaluation and the later ones never
+    count; racing is decided on the returns in seed order.
+
+    The one episode loop of both scoring paths: the fast path (`evaluate_program`) runs its
+    episodes one at a time with the policy in process, the referee
+    (`colmo.sandbox.referee`) runs batches side by side with the actions from its child; both
+    step them through `run`, so they agree by construction."""
+
+    def __init__(self, envs: Sequence[Environment], seeds: Sequence[int], steps: int | None = None, race: Race | None = None):
+        self.envs, self.seeds, self.race = envs, seeds, race
+        self.horizon = steps or envs[0].horizon
+        self.returns: list[float] = []  # of the episodes finished, in seed order
+        self.failures: dict[int, str] = {}
+        self.live: list[Episode] = []
+        self.simulated = 0
+        self.raced_out = False
+
+    @property
+    def settled(self) -> bool:
+        """Whether the episodes not run yet can no longer change the evaluation."""
+        return self.raced_out or bool(self.failures)
+
+    def fail(self, index: int, reason: str) -> None:
+        """Episode `index` failed: run one after another, the episodes after it never start."""
+        self.failures[index] = reason
+        self.live = [episode for episode in self.live if episode.index < index]
+
+    def run(self, batch: range, actions: Actions, recorder: TraceRecorder | None = None) -> None:
+        """Run the episodes `batch` (consecutive indices, episode i in `envs[i % len(envs)]`)
+        side by side to their end or failure. At each control step `actions(live, step)` gives
+        the live episodes' actions: it reports an episode whose policy fails to `fail`, then
+        gives the actions of the episodes still live (`self.live`), in order. `recorder`
+        records the steps of a batch of one episode."""
+        live = self.live = [Episode(index, self.envs[index % len(self.envs)], self.seeds[index]) for index in batch]
+        if recorder is not None:
+            recorder.start(live[0].obs)
+        simulated = 0
+        for step in range(self.horizon):
+            if not live:
+                break
+            chosen = actions(live, step)
+            live = self.live
+            for episode, action in zip(live, chosen):
+                reward, episode.obs = episode.env.step(action)
+                episode.total += reward
+                if recorder is not None:
+                    recorder.step(action, reward, episode.obs)
+            simulated += len(live)
+        self.simulated += simulated
+        for episode in live:
+            try:
+                episode.env.check_episode()
+            except PolicyFailure as failure:
+                self.fail(episode.index, str(failure))
+        for episode in self.live:  # in seed order, each before any failure
+            self.returns.append(episode.total)
+            if self.race is not None and self.race.gives_up(self.returns):
+                self.raced_out = True
+                break
+
+    def evaluation(self) -> Evaluation:
+        """What the episodes run so far give, as if run one after another in seed order."""
+        returns = tuple(self.returns)
+        if self.raced_out:
+            return Evaluation(returns, None, self.simulated, raced_out=True)
+        failure = self.failures[min(self.failures)] if self.failures else None
+        return Evaluation(returns, failure, self.simulated)
+
+
 def rollout(env: Environment, policy: Policy, seed: int, steps: int | None = None) -> tuple[float, int]:
-    """Return of one episode and the control steps it took; raises `PolicyFailure` with the
-    reason if anything goes wrong."""
-    # Policies may draw from np.random (the paper's quadruped policy adds noise): seeding it per
-    # episode keeps the objective a deterministic function of the parameters.
-    np.random.seed(seed % 2**32)
-    obs = env.reset(seed)
-    total = 0.0
-    horizon = steps or env.horizon
-    for step in range(horizon):
-        # A copy: an environment may return a view of its simulation state (`self.data.qpos`),
-        # which a policy writing to its `obs` would otherwise change.
-        reward, obs = env.step(act(policy, obs.copy(), env.action_size, step))
-        total += reward
-    env.check_episode()
-    return total, horizon
+    """Return of one episode of `policy` and the control steps it took; raises `PolicyFailure`
+    with the reason if anything goes wrong."""
+    evaluation = evaluate_policy(env, policy, [seed], steps)
+    if evaluation.failure is not None:
+        raise PolicyFailure(evaluation.failure)
+    return evaluation.returns[0], evaluation.steps
 
 
 def evaluate_policy(env: Environment, policy: Policy, seeds: Sequence[int], steps: int | None = None, race: Race | None = None) -> Evaluation:
@@ -131,18 +215,30 @@ def evaluate_program(
     `new_policy(seed)` makes (it raises `PolicyFailure` when it cannot); a failure in any
     episode fails the whole evaluation; with `race`, the episodes stop once the candidate gives
     up (`Race.gives_up`)."""
-    returns: list[float] = []
-    simulated = 0
-    for seed in seeds:
+    episodes = Episodes([env], seeds, steps, race)
+    for index, seed in enumerate(seeds):
         try:
-            policy = new_policy(seed)
-            episode_return, episode_steps = rollout(env, policy, seed, steps)
-        except PolicyFailure as failure:
-            return Evaluation(tuple(returns), str(failure), simulated)
+            episodes.run(range(index, index + 1), _in_process(new_policy(seed), episodes))
+        except PolicyFailure as failure:  # from `new_policy`
+            episodes.fail(index, str(failure))
         except RecursionError:
-            return Evaluation(tuple(returns), "exception: RecursionError: maximum recursion depth exceeded", simulated)
-        returns.append(episode_return)
-        simulated += episode_steps
-        if race is not None and race.gives_up(returns):
-            return Evaluation(tuple(returns), None, simulated, raced_out=True)
-    return Evaluation(tuple(returns), None, simulated)
+            episodes.fail(index, "exception: RecursionError: maximum recursion depth exceeded")
+        if episodes.settled:
+            break
+    return episodes.evaluation()
+
+
+def _in_process(policy: Policy, episodes: Episodes) -> Actions:
+    """The actions of `policy`, run here, for a batch of one episode."""
+    action_size = episodes.envs[0].action_size
+
+    def actions(live: list[Episode], step: int) -> Sequence[np.ndarray]:
+        episode = live[0]
+        try:
+            # A copy: an environment may return a view of its simulation state
+            # (`self.data.qpos`), which a policy writing to its `obs` would otherwise change.
+            return (act(policy, episode.obs.copy(), action_size, step),)
+        except PolicyFailure as failure:
+            episodes.fail(episode.index, str(failure))
+            return ()
+    return actions

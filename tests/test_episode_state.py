@@ -140,3 +140,21 @@ def test_colmo_optimize_scores_the_counter_alike_with_any_worker_count(tmp_path)
         summaries.append(last_json_line(run.stdout))
     assert all(summary["failure"] is None and summary["episodes"] == 10 for summary in summaries), summaries
     assert summaries[0]["returns"] == summaries[1]["returns"] and summaries[0]["score"] == summaries[1]["score"]
+
+
+def test_racing_over_more_episodes_than_a_lockstep_batch_decides_on_the_episodes_run(pendulum):
+    """More episodes than the referee steps side by side: after each batch, racing decides on the
+    returns of the episodes run so far, never on those of the batches still to run. (Against an
+    incumbent that the candidate beats on every episode, racing never gives up; counted as
+    returns of 0, the episodes not yet run made it give up.)"""
+    from colmo.sandbox.referee import LOCKSTEP
+
+    executor, evaluator = pendulum
+    program = parametrize(INTEGRATOR)
+    seeds = tuple(range(4 * LOCKSTEP))
+    [full] = executor.evaluate([evaluator.request(program.skeleton, program.values, seeds=seeds)])
+    beaten = Race((min(full.returns) - 1.0,) * len(seeds), min_episodes=2, margin=0.0)
+    assert beaten.gives_up(full.returns[:LOCKSTEP] + (0.0,) * (2 * LOCKSTEP))  # what the episodes not run would have said
+    for mode in (FAST, REFEREE):
+        [raced] = executor.evaluate([evaluator.request(program.skeleton, program.values, seeds=seeds, mode=mode, race=beaten)])
+        assert (raced.returns, raced.failure, raced.raced_out) == (full.returns, None, False), mode

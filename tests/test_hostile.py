@@ -293,7 +293,8 @@ def test_a_forged_score_is_caught_by_the_referee(sandbox, baseline, escaped_spec
     """An escaped program replaces the evaluator in its own process: the fast path reports what
     it likes, the referee measures what its actions earn."""
     forge = (  # with the real builtins' setattr, as an object-array escape would find them
-        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.rollout'], 'rollout', lambda env, policy, seed, steps=None: (1000.0, 1000))\n"
+        "import sys\nR = sys.modules['colmo.rollout']\n"
+        "sys.modules['builtins'].setattr(R.Episodes, 'evaluation', lambda self: R.Evaluation((1000.0,) * len(self.seeds), None, 1000 * len(self.seeds)))\n"
         + NOTHING
     )
     imports = ("numpy", "math", "os", "sys", "ctypes", "socket")
@@ -539,7 +540,8 @@ def test_a_tampering_programs_initial_score_is_the_referees(sandbox, baseline, e
     """A program that forges every fast-path evaluation is failed as tampering, its initial
     score is what the referee measured, and the forged number is nowhere in its result."""
     forge = (
-        "import sys\nsys.modules['builtins'].setattr(sys.modules['colmo.rollout'], 'rollout', lambda env, policy, seed, steps=None: (float('987.654'), int('1000')))\n"
+        "import sys\nR = sys.modules['colmo.rollout']\n"
+        "sys.modules['builtins'].setattr(R.Episodes, 'evaluation', lambda self: R.Evaluation((float('987.654'),) * len(self.seeds), None, int('1000')))\n"
         + NOTHING
     )
     result, own_constants = tuned_escaped(sandbox, escaped_spec, forge)

@@ -32,9 +32,11 @@ With `trace` set, a request runs one episode, which the worker also records as i
 (`colmo.trace.TraceRecorder`) and returns in `Evaluation.trace`: the recording is as
 trustworthy as the returns, since the child takes no part in it.
 
-The child mirrors `colmo.rollout.rollout`: the same `act` (policy call and action check) and
-failure reasons, each instance's `np.random` seeded as rollout seeds the global one, so a
-referee evaluation returns exactly what the fast path returns for an honest program.
+Both sides run what the fast path runs: the worker steps its episodes through the same loop
+(`colmo.rollout.Episodes`: seeding, reset, step, reward sum, end check, failure order, racing),
+the child calls the same `act` (policy call and action check) with the same failure reasons,
+each instance's `np.random` seeded as the episode seeds the global one, so a referee evaluation
+returns exactly what the fast path returns for an honest program.
 """
 
 from __future__ import annotations
@@ -51,8 +53,7 @@ import numpy as np
 from colmo.environments.base import Environment, PolicyFailure
 from colmo.errors import describe_exception, failure_reason
 from colmo.evaluation import EvalRequest, Evaluation
-from colmo.racing import Race
-from colmo.rollout import act
+from colmo.rollout import Episode, Episodes, act
 from colmo.sandbox.namespace import compile_or_explain
 from colmo.trace import MAX_STEPS, TraceError, TraceRecorder
 
@@ -207,32 +208,6 @@ def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd:
         step += 1
 
 
-class _Episodes:
-    """The worker's view of a request's episodes in lockstep: which still run, their returns
-    so far, and the failures that decide the evaluation."""
-
-    def __init__(self, count: int):
-        self.live = list(range(count))
-        self.totals = [0.0] * count
-        self.failures: dict[int, str] = {}
-
-    def fail(self, index: int, reason: str) -> None:
-        """Episode `index` failed: run as one after another, the episodes after it never start."""
-        self.failures[index] = reason
-        self.live = [other for other in self.live if other < index]
-
-    def evaluation(self, race: Race | None, simulated: int) -> Evaluation:
-        """What running the episodes one after another in seed order gives."""
-        returns: list[float] = []
-        for index, total in enumerate(self.totals):
-            if index in self.failures:
-                return Evaluation(tuple(returns), self.failures[index], simulated)
-            returns.append(total)
-            if race is not None and race.gives_up(returns):
-                return Evaluation(tuple(returns), None, simulated, raced_out=True)
-        return Evaluation(tuple(returns), None, simulated)
-
-
 def referee_evaluation(envs: Sequence[Environment], request: EvalRequest, read_fd: int, write_fd: int, deadline: float) -> Evaluation:
     """The worker's side: run the episodes of `request` in lockstep, `len(envs)` at a time
     (episode i in `envs[i % len(envs)]`), asking the child for all the live episodes' actions
@@ -245,102 +220,73 @@ def referee_evaluation(envs: Sequence[Environment], request: EvalRequest, read_f
             return Evaluation(failure=f"invalid: a traced evaluation runs one episode of at most {MAX_STEPS} steps")
         recorder = TraceRecorder(envs[0])
     channel = _Channel(read_fd, write_fd, deadline)
-    episodes = _Episodes(len(request.seeds))
-    simulated = 0
-    evaluation = episodes.evaluation(request.race, simulated)
+    episodes = Episodes(envs, request.seeds, request.steps, request.race)
     for first in range(0, len(request.seeds), len(envs)):
         batch = range(first, min(first + len(envs), len(request.seeds)))
-        episodes.live = list(batch)
-        simulated += _run_batch(channel, envs, request, episodes, recorder)
-        evaluation = episodes.evaluation(request.race, simulated)
-        if evaluation.failure is not None or evaluation.raced_out:
+        channel.send(frame(b"S", _COUNT.pack(first) + np.asarray(request.seeds[first:batch.stop], dtype="<i8").tobytes()))
+        episodes.run(batch, _Exchange(channel, episodes, envs[0].action_size), recorder)
+        if episodes.settled:
             break
     channel.send(frame(b"Q"))
+    evaluation = episodes.evaluation()
     if recorder is None or evaluation.failure is not None:
         return evaluation
     try:
         trace = recorder.finish().to_dict()
     except TraceError as error:  # e.g. non-finite observations: nothing a renderer could draw
-        return Evaluation(evaluation.returns, str(error), simulated)
-    return Evaluation(evaluation.returns, None, simulated, trace=trace)
+        return Evaluation(evaluation.returns, str(error), evaluation.steps)
+    return Evaluation(evaluation.returns, None, evaluation.steps, trace=trace)
 
 
-def _run_batch(channel: _Channel, envs: Sequence[Environment], request: EvalRequest, episodes: _Episodes, recorder: TraceRecorder | None) -> int:
-    """Run the episodes `episodes.live` (consecutive indices) side by side to their end or
-    failure; the control steps simulated."""
-    first = episodes.live[0]
-    seeds = [request.seeds[index] for index in episodes.live]
-    channel.send(frame(b"S", _COUNT.pack(first) + np.asarray(seeds, dtype="<i8").tobytes()))
-    initial = []
-    for index, seed in zip(episodes.live, seeds):
-        np.random.seed(seed % 2**32)  # as rollout does, for any environment that draws from it
-        initial.append(envs[index % len(envs)].reset(seed))
-    observations = np.array(initial, dtype=np.float64)  # row k: episode first + k, sent as it is
-    if recorder is not None:
-        recorder.start(observations[0])
-    action_size = envs[0].action_size
-    totals = episodes.totals
-    simulated = 0
-    framed: list[int] | None = None
-    for _ in range(request.steps or envs[0].horizon):
-        live = episodes.live
-        if not live:
-            break
-        if live is not framed:  # the first step, or a failure changed the live episodes
-            framed, rows = live, [index - first for index in live]
-            payload_size = _COUNT.size + 4 * len(live) + observations.itemsize * observations.shape[1] * len(live)
-            header = _HEADER.pack(b"O", payload_size) + _COUNT.pack(len(live)) + np.asarray(live, dtype="<u4").tobytes()
-            stepping = [(index, index - first, envs[index % len(envs)]) for index in live]
-        sent = observations if len(rows) == len(observations) else observations[rows]
-        channel.send(header + sent.tobytes())
-        acting, actions = _actions(channel, live, action_size, episodes)
-        if episodes.live is live:  # no episode failed at this step: all of them act
-            acted = stepping
-        else:  # only the acting episodes that are still live (a failure drops the later ones)
-            kept = [k for k, index in enumerate(acting) if index in episodes.live]
-            acted, actions = [(acting[k], acting[k] - first, envs[acting[k] % len(envs)]) for k in kept], actions[kept]
-        for (index, row, env), action in zip(acted, actions):
-            reward, obs = env.step(action)
-            if recorder is not None:
-                recorder.step(action, reward, obs)
-            observations[row] = obs
-            totals[index] += reward
-        simulated += len(acted)
-    for index in episodes.live:
-        try:
-            envs[index % len(envs)].check_episode()
-        except PolicyFailure as failure:
-            episodes.fail(index, str(failure))
-    return simulated
+class _Exchange:
+    """The worker's side of a batch's control steps (`colmo.rollout.Actions`): the live episodes'
+    observations to the child, their actions back, checked here (they come from untrusted
+    code). The frame's header, derived from the live episodes, is kept until one fails."""
 
+    def __init__(self, channel: _Channel, episodes: Episodes, action_size: int):
+        self.channel, self.episodes, self.action_size = channel, episodes, action_size
+        self.framed: list[Episode] | None = None
+        self.indices: list[int] = []
+        self.header = b""
 
-def _actions(channel: _Channel, live: list[int], action_size: int, episodes: _Episodes) -> tuple[list[int], np.ndarray]:
-    """The child's actions for the `live` episodes, checked here (they come from untrusted
-    code): the episodes that act and their actions, one row each. The failures the child
-    reports, and malformed answers, go to `episodes` (so `episodes.live` is `live` still
-    only when no episode failed)."""
-    failed = set()
-    while True:
-        tag, payload = channel.receive()
-        if tag != b"F":
-            break
-        (index,) = _COUNT.unpack_from(payload) if len(payload) >= _COUNT.size else (-1,)
-        if index not in live or index in failed:
-            episodes.fail(live[0], "tampering: the policy process sent a malformed action")
-            return [], np.empty((0, action_size))
-        failed.add(index)
-        episodes.fail(index, failure_reason(payload[_COUNT.size:].decode("utf-8", errors="replace")))
-    acting = [index for index in live if index not in failed] if failed else live
-    if tag != b"A" or len(payload) != 8 * action_size * len(acting):
-        episodes.fail(live[0], "tampering: the policy process sent a malformed action")
-        return [], np.empty((0, action_size))
-    # A copy: the environment gets writable actions, as in the fast path.
-    actions = np.frombuffer(payload, dtype=np.float64).reshape(len(acting), action_size).copy()
-    # A finite sum means finite values (a NaN or an infinity makes it NaN or infinite); finite
-    # values whose sum overflows go to the exact check, which finds no culprit. Summed as Python
-    # floats: for a few values, cheaper than numpy's per-call cost.
-    if not math.isfinite(sum(actions.ravel().tolist())):
-        for index, finite in zip(acting, np.isfinite(actions).all(axis=1).tolist()):
-            if not finite:
-                episodes.fail(index, "tampering: the policy process sent a malformed action")
-    return acting, actions
+    def __call__(self, live: list[Episode], step: int) -> np.ndarray:
+        if live is not self.framed:  # the first step, or a failure changed the live episodes
+            self.framed, self.indices = live, [episode.index for episode in live]
+            self.header = _COUNT.pack(len(live)) + np.asarray(self.indices, dtype="<u4").tobytes()
+        body = np.array([episode.obs for episode in live], dtype=np.float64).tobytes()
+        self.channel.send(_HEADER.pack(b"O", len(self.header) + len(body)) + self.header + body)
+        acting, actions = self._receive()
+        if self.episodes.live is not live:  # some failed: the actions of the episodes still live
+            still = {episode.index for episode in self.episodes.live}
+            actions = actions[[k for k, index in enumerate(acting) if index in still]]
+        return actions
+
+    def _receive(self) -> tuple[list[int], np.ndarray]:
+        """The episodes that act and their actions, one row each. The failures the child
+        reports, and malformed answers, go to `episodes`."""
+        indices, episodes, size = self.indices, self.episodes, self.action_size
+        failed = set()
+        while True:
+            tag, payload = self.channel.receive()
+            if tag != b"F":
+                break
+            (index,) = _COUNT.unpack_from(payload) if len(payload) >= _COUNT.size else (-1,)
+            if index not in indices or index in failed:
+                episodes.fail(indices[0], "tampering: the policy process sent a malformed action")
+                return [], np.empty((0, size))
+            failed.add(index)
+            episodes.fail(index, failure_reason(payload[_COUNT.size:].decode("utf-8", errors="replace")))
+        acting = [index for index in indices if index not in failed] if failed else indices
+        if tag != b"A" or len(payload) != 8 * size * len(acting):
+            episodes.fail(indices[0], "tampering: the policy process sent a malformed action")
+            return [], np.empty((0, size))
+        # A copy: the environment gets writable actions, as in the fast path.
+        actions = np.frombuffer(payload, dtype=np.float64).reshape(len(acting), size).copy()
+        # A finite sum means finite values (a NaN or an infinity makes it NaN or infinite); finite
+        # values whose sum overflows go to the exact check, which finds no culprit. Summed as
+        # Python floats: for a few values, cheaper than numpy's per-call cost.
+        if not math.isfinite(sum(actions.ravel().tolist())):
+            for index, finite in zip(acting, np.isfinite(actions).all(axis=1).tolist()):
+                if not finite:
+                    episodes.fail(index, "tampering: the policy process sent a malformed action")
+        return acting, actions
