@@ -28,14 +28,18 @@ import random
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any, Optional
-
-import openai
+from typing import TYPE_CHECKING, Any, Optional
 
 from colmo.config import OpenAIConfig
 from colmo.errors import one_line
 from colmo.generate.base import GENERATORS, Generation, GeneratorError, LanguageModelGenerator, Probe, batch_of, describe_error, logger
 from colmo.prompt import COMPLETION_STOP, Prompt
+
+# openai is imported where a client is made or its errors are caught, not here: importing it
+# takes ~0.7 s of CPU, which every colmo command paid (the registries import this module),
+# whatever its generator.
+if TYPE_CHECKING:
+    import openai
 
 _CHECK_TIMEOUT_S = 5.0
 _RETRYABLE_STATUS = frozenset({408, 409, 429})
@@ -79,6 +83,7 @@ class OpenAIGenerator(LanguageModelGenerator):
     options = OpenAIConfig
 
     def __init__(self, cfg: OpenAIConfig, seed: int, probe: Optional[Probe] = None):
+        import openai
         super().__init__(cfg, seed, probe)
         api_key = os.environ.get(cfg.api_key_env) or "EMPTY"  # local servers want no key, the client wants one
         self._servers = [
@@ -96,6 +101,7 @@ class OpenAIGenerator(LanguageModelGenerator):
     def _check_servers(self) -> None:
         """At least one server answers (any HTTP answer counts) within `_CHECK_TIMEOUT_S`, so a
         run without one ends at once, saying how to start one; the others are logged."""
+        import openai
         silent = []
         for server in self._servers:
             try:
@@ -120,6 +126,7 @@ class OpenAIGenerator(LanguageModelGenerator):
         name, HTTP 404 or 501). Busy answers (408, 409, 429, 5xx other than 501: a llama.cpp
         server still loading its model answers 503) count as serving: the search retries them.
         The start-up check (`colmo.__main__.check_inputs`) runs it before anything is created."""
+        import openai
         refusals = []
         for server in self._servers:
             client = server.client.with_options(timeout=self.cfg.timeout_s)
@@ -158,6 +165,7 @@ class OpenAIGenerator(LanguageModelGenerator):
 
     def _complete(self, prompt: Prompt, n: int, seed: int) -> list[Generation]:
         """One request, retried; its generations, or none once its retries are spent."""
+        import openai
         cfg = self.cfg
         for attempt in range(cfg.max_retries + 1):
             server = self._acquire()
