@@ -44,6 +44,8 @@ _EXPORTS = {
     "Generator": "colmo.generate",
     "METHODS": "colmo.optimize.methods",
     "Method": "colmo.optimize.methods",
+    "GFOConfig": "colmo.config",
+    "option": "colmo.config.fields",
     "EXECUTORS": "colmo.executor",
     "TRACKERS": "colmo.trackers",
 }

@@ -34,7 +34,8 @@ from typing import Any, Callable, NoReturn, Optional, Protocol
 import hydra
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from colmo.config.schemas import CONFIG_MODULE, SCHEMAS, register_schemas
+from colmo.components import register_schemas, schema_names
+from colmo.config.schemas import CONFIG_MODULE
 from colmo.errors import EXIT_RUNTIME, EXIT_USAGE, ConfigError, RunError, one_line
 
 
@@ -184,7 +185,10 @@ def hydra_app(
                     check(cfg)
 
         def main() -> None:
-            register_schemas()
+            try:
+                register_schemas()  # imports installed packages' components: one may fail
+            except ConfigError as error:
+                _fail(error, verbose=_verbose(sys.argv[1:]))
             args = _parse(sys.argv[1:])
             if args.help:
                 from colmo.help import help_text  # only for --help: textwrap, resources, inspect
@@ -237,7 +241,7 @@ def _shell_completion(hydra_main: Callable[[], None], overrides: list[str]) -> N
         sys.modules["hydra_plugins"] = None  # its import fails: Hydra's "no plugins installed" case
     with contextlib.redirect_stdout(io.StringIO()) as answer:
         hydra_main()
-    hidden = {f"{group}={name}" for group, name in SCHEMAS if group is not None}
+    hidden = schema_names()
     for line in answer.getvalue().splitlines():  # bash: one line of words; fish: a word per line
         words = [word for word in line.split(" ") if word.lstrip("+~") not in hidden]
         if words or not line:

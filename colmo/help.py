@@ -16,7 +16,8 @@ from typing import Optional
 from omegaconf import DictConfig, ListConfig, OmegaConf, open_dict
 
 from colmo import config
-from colmo.config.schemas import CONFIG_MODULE, register_schemas
+from colmo.components import register_schemas
+from colmo.config.schemas import CONFIG_MODULE
 
 _HELP_WIDTH = 100
 

@@ -7,7 +7,9 @@ registry rather than Hydra's `_target_` + `instantiate`: a request stays plain d
 and typed fields), a name is checked against the registered ones before Hydra starts, and error
 messages and help list the names from the registry itself. Each component says which option
 schema it needs (`options`, a class of `colmo.config`), so an option file that sets a name its
-schema does not fit ends in one line too.
+schema does not fit ends in one line too. A name is registered once: a second component under
+a taken name is refused. `colmo.components` loads every registry, with the components of
+installed packages, and builds Hydra's schema table from them.
 """
 
 from __future__ import annotations
@@ -30,9 +32,13 @@ class Registry(Mapping[str, T], Generic[T]):
         self._entries: dict[str, T] = {}
 
     def register(self, name: str) -> Callable[[T], T]:
-        """Decorator: make the component available as `<key>=<name>`."""
+        """Decorator: make the component available as `<key>=<name>`; `ValueError` if another
+        component has the name (a second registration of the same one changes nothing)."""
 
         def add(component: T) -> T:
+            taken = self._entries.get(name)
+            if taken is not None and taken is not component:
+                raise ValueError(f"{self.key}={name} is taken by {_qualified(taken)}: {_qualified(component)} needs another name")
             self._entries[name] = component
             return component
 
@@ -63,3 +69,7 @@ class Registry(Mapping[str, T], Generic[T]):
         component: Any = self.chosen(name)
         if not isinstance(options, component.options):
             raise ConfigError(f"{self.key}={name} needs the {name} options: use {self.group}={name}")
+
+
+def _qualified(component: Any) -> str:
+    return f"{getattr(component, '__module__', '?')}.{getattr(component, '__qualname__', repr(component))}"

@@ -1,17 +1,15 @@
-"""The schemas as Hydra knows them: each registered in Hydra's `ConfigStore` under the name the
-YAML options of the bundled configs (`CONFIG_MODULE`, colmo/conf/) put in their defaults list
-(`- schema`, `- bo_schema`), so that every option is composed over its group's dataclass. The
-apps (`colmo.cli`) and `--help` (`colmo.help`) both read them from here."""
+"""The schemas of the config groups and apps, by the name the YAML options of the bundled configs
+(`CONFIG_MODULE`, colmo/conf/) put in their defaults list (`- schema`, `- search_schema`), so that
+every option is composed over its group's dataclass. A component's own option schema
+(`- bo_schema`) is not listed here: `colmo.components` adds it from the component's registry,
+where the component says which schema it needs (its `options`)."""
 
 from __future__ import annotations
 
 from typing import Optional
 
-from hydra.core.config_store import ConfigStore
-
 from colmo.config.apps import EvaluateConfig, OptimizeConfig, RenderConfig, ReportConfig, SearchConfig, SimplifyAppConfig
-from colmo.config.components import BOConfig, ExecutorConfig, GFOConfig, MlflowConfig, RayExecutorConfig, TrackerConfig
-from colmo.config.generators import LlamaCppConfig, MutateConfig, OpenAIConfig, VLLMConfig
+from colmo.config.components import ExecutorConfig, GFOConfig, TrackerConfig
 from colmo.config.search import DatabaseConfig
 from colmo.config.task import TaskConfig
 
@@ -20,16 +18,9 @@ CONFIG_MODULE = "colmo.conf"  # the bundled configs (colmo/conf/)
 SCHEMAS: dict[tuple[Optional[str], str], type] = {
     ("task", "schema"): TaskConfig,
     ("gfo", "schema"): GFOConfig,
-    ("gfo", "bo_schema"): BOConfig,
     ("executor", "schema"): ExecutorConfig,
-    ("executor", "ray_schema"): RayExecutorConfig,
     ("database", "schema"): DatabaseConfig,
     ("tracker", "schema"): TrackerConfig,
-    ("tracker", "mlflow_schema"): MlflowConfig,
-    ("llm", "mutate_schema"): MutateConfig,
-    ("llm", "openai_schema"): OpenAIConfig,
-    ("llm", "vllm_schema"): VLLMConfig,
-    ("llm", "llamacpp_schema"): LlamaCppConfig,
     (None, "search_schema"): SearchConfig,
     (None, "optimize_schema"): OptimizeConfig,
     (None, "evaluate_schema"): EvaluateConfig,
@@ -37,10 +28,3 @@ SCHEMAS: dict[tuple[Optional[str], str], type] = {
     (None, "render_schema"): RenderConfig,
     (None, "report_schema"): ReportConfig,
 }
-
-
-def register_schemas() -> None:
-    """Every schema in Hydra's `ConfigStore`, under its name (idempotent)."""
-    store = ConfigStore.instance()
-    for (group, name), schema in SCHEMAS.items():
-        store.store(group=group, name=name, node=schema)

@@ -17,11 +17,12 @@ import importlib.util
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from colmo import astutil
-from colmo.environments.base import Environment
-from colmo.environments.perturb import perturbable
+
+if TYPE_CHECKING:  # the simulator (MuJoCo) is imported when a spec is loaded, not with the prompt's imports
+    from colmo.environments.base import Environment
 
 DEFAULT_IMPORTS = ("numpy", "math")
 
@@ -63,6 +64,8 @@ def _starter_code(source: str, tree: ast.Module, path: Path) -> str:
 
 def load_spec(name_or_path: str) -> Spec:
     """Load and check a spec file; raises `SpecError` with a one-line reason."""
+    from colmo.environments.perturb import perturbable
+
     path = resolve_spec_path(name_or_path)
     source = path.read_text()
     try:
