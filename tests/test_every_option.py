@@ -17,7 +17,7 @@ from importlib import resources
 
 import numpy as np
 import pytest
-from conftest import compose
+from conftest import compose, unavailable
 
 from colmo.config.fields import check_component
 from colmo.config.schemas import CONFIG_MODULE
@@ -44,7 +44,7 @@ def test_every_option_composes_and_builds_its_component(group, option, tmp_path)
     if (group, option) == ("llm", "llamacpp"):
         model = os.environ.get("COLMO_TEST_MODEL")
         if not model:
-            pytest.skip("llm=llamacpp is built with the test model (COLMO_TEST_MODEL): tests/test_llm.py says how to fetch it")
+            unavailable("llm=llamacpp is built with the test model: set COLMO_TEST_MODEL (scripts/fetch_test_model.py)", "every option is built in CI")
         overrides += [f"llm.model_path={model}", "llm.max_tokens=16"]  # an answer, however short: built, not judged
     cfg = compose("search", *overrides)
     options = getattr(cfg, group)
