@@ -3,7 +3,9 @@ single run's process, imports and Hydra included; each job of a `-m` sweep from 
 whichever launcher runs it: `job_start`); the search's own deadline, early enough to leave the programs in
 flight their final scores and the finish its held-out scores, simplification and video
 (`colmo.finish.plan_finish`, from the starter's calibration); and the run's estimated
-duration, said in one line before the first batch with the limit that binds.
+duration, said in one line before the first batch with the limit that binds, from the starter's
+tuning, then again once samples settle, from the time they took (`follow_samples`: generation,
+tuning and waiting included), and whenever that estimate moves by more than 30%.
 
 The deadline depends on how many programs are being tuned: each one in flight at the deadline
 still ends its candidate and scores its rounded constants on the fast path and by the referee.
@@ -38,6 +40,7 @@ from colmo.config import SearchConfig
 from colmo.evaluation import Executor
 from colmo.finish import FINISH_SHARE, SAFETY, FinishPlan, RefereeCost, plan_finish
 from colmo.optimize.tune import ProgramResult
+from colmo.record import Totals
 
 log = logging.getLogger("colmo.search")
 
@@ -48,6 +51,7 @@ _STARTER_SHARE = 1 / 3  # of the time limit, at most, for the starter's tuning b
 _LOAD_EVERY_S = 1.0  # how often the deadline follows the workers' speed
 _LOAD_WINDOW = 8  # evaluations per worker over which their recent speed is measured
 _OBSERVED = 8  # programs whose final scores say what the next ones' will cost
+_RESAY = 0.3  # an estimate of the search's end is said again when it moves by more than this share
 
 
 class TimeBudget:
@@ -73,7 +77,10 @@ class TimeBudget:
         self._starter_deadline = self.start + _STARTER_SHARE * (self.end - self.start)
         self.calibration = RefereeCost(0.0, 0.0)  # the starter's referee cost, from its calibration
         self._calibration_referee = 0.0  # the calibration's referee evaluation, worker seconds
-        self.estimated_seconds: Optional[float] = None  # the search by max_samples, before the first batch
+        # When the search ends by max_samples, in seconds from `start`: from the starter's tuning
+        # (`plan`), then from the samples settled (`follow_samples`); None while nothing tells.
+        self.estimated_seconds: Optional[float] = None
+        self._said: Optional[tuple[float, float]] = None  # when an estimate of the search's end was last said, and that end
         self.load_factor = 1.0  # the workers' recent seconds per evaluation over the calibration's
         self._lock = threading.Lock()
         self._executor: Optional[Executor] = None
@@ -175,7 +182,8 @@ class TimeBudget:
         self._reference = executor.busy_seconds / executor.evaluations_done if executor.evaluations_done else 0.0
         concurrent_programs = cfg.llm.batch_size * cfg.search.queue_size
         in_parallel = max(1, min(concurrent_programs, workers // cfg.gfo.workers))
-        self.estimated_seconds = cfg.search.max_samples * program_seconds / in_parallel
+        search = cfg.search.max_samples * program_seconds / in_parallel if program_seconds else None
+        self.estimated_seconds = None if search is None else self.elapsed() + search
         plan = plan_finish(cfg, self.calibration, workers)
         limit = "max_samples"
         if self.max_seconds:
@@ -184,16 +192,45 @@ class TimeBudget:
             self._recent.append((executor.evaluations_done, executor.busy_seconds))
             plan = self._plan_finish()
             limit = f"max_seconds={self.max_seconds:g}"
-            if self.deadline_with(cfg.llm.batch_size) - time.perf_counter() >= self.estimated_seconds:
+            if search is not None and self.deadline_with(cfg.llm.batch_size) - time.perf_counter() >= search:
                 limit = "max_samples"
         early = ""
         if limit.startswith("max_seconds"):
             early = f" (search stops {duration(self.end - self.deadline_with(cfg.llm.batch_size))} early to finish)"
             if not self.can_start(1):
                 early = " (no time left to search: the finish works on the starter)"
+        if search is None:
+            what = "estimated once the first samples are in (the starter has no constants to tune: its time says nothing of a program's)"
+        else:
+            what = f"{duration(search)} ({cfg.search.max_samples} samples x {program_seconds:.1f} s of tuning, {in_parallel} at a time"
+            what += ", generation measured on the first samples)" if cfg.llm.name != "mutate" else ")"
+        log.info("estimated duration: search %s, finish %s; limit that binds: %s%s", what, duration(plan.seconds), limit, early)
+
+    def follow_samples(self, totals: Totals, resumed_samples: int, max_samples: int, now: Optional[float] = None) -> None:
+        """The search's end re-estimated from the samples settled so far (`totals.samples`, of
+        which `resumed_samples` in an earlier process), at the time those of this process took
+        since the first batch, generation, tuning and waiting included; said in one line the first
+        time and whenever it moves by more than 30%, with what the model calls took. `now`:
+        `time.perf_counter()` unless given."""
+        samples, settled_here = totals.samples, totals.samples - resumed_samples
+        if self._searching is None or settled_here < 1:
+            return
+        now = time.perf_counter() if now is None else now
+        per_sample = (now - self._searching) / settled_here
+        left = max(max_samples - samples, 0) * per_sample
+        self.estimated_seconds = now - self.start + left
+        if self._said is not None and abs(now + left - self._said[1]) <= _RESAY * max(self._said[1] - self._said[0], per_sample):
+            return
+        self._said = (now, now + left)
+        binds = "max_samples"
+        if self.max_seconds and now + left > self.deadline:
+            binds = f"max_seconds={self.max_seconds:g} (the search stops in {duration(max(self.deadline - now, 0.0))})"
+        model = ""
+        if totals.tokens_per_second:  # a language model: what its calls take
+            model = f", model calls {totals.generator_busy * totals.seconds / samples:.0f} s each at {totals.tokens_per_second:.1f} tokens/s"
         log.info(
-            "estimated duration: search %s (%d samples x %.1f s, %d at a time, generation not included), finish %s; limit that binds: %s%s",
-            duration(self.estimated_seconds), cfg.search.max_samples, program_seconds, in_parallel, duration(plan.seconds), limit, early,
+            "estimated duration, measured on %d samples: search %s more (%.1f s a sample%s); limit that binds: %s",
+            settled_here, duration(left), per_sample, model, binds,
         )
 
     def _plan_finish(self) -> FinishPlan:

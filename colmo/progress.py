@@ -3,7 +3,8 @@
 On a terminal: a live display on stderr, redrawn twice a second from the search's counters, so
 it moves with every evaluation, not every batch: model calls (samples, duplicates and their
 regenerations included) and the programs evaluated of them, evaluations and evaluations/s,
-control steps, the best training score, generator and evaluator busy, and the time left
+control steps, the best training score, generator and evaluator busy (with how long the model's
+call in flight has run, from its first second), and the time left
 against the limit that binds (samples, seconds, or a target score), from the first seconds on
 (the starter's calibration estimates the search until samples settle). Log lines print above it
 (rich's logging handler on the display's console), never into it. Without a terminal: the
@@ -51,6 +52,7 @@ class Snapshot:
     stop_at_score: Optional[float]
     estimated_seconds: Optional[float] = None  # the search by max_samples, from the starter's calibration
     resumed_samples: int = 0  # model calls an earlier process of a resumed run settled: not in this one's rate
+    call_seconds: Optional[float] = None  # how long the generator's call in flight has run (None: no call in flight)
 
     @property
     def evaluations_per_second(self) -> float:
@@ -60,15 +62,15 @@ class Snapshot:
         """Seconds left against the limit that binds first, and its name: `stop_at_score` (0 s:
         the target is reached, the search is finishing), else whichever of `max_seconds` and
         `max_samples` (at the rate samples have settled so far; before the first one settles, by
-        the estimate from the starter's calibration) ends the run sooner. None when nothing
-        tells yet (no sample settled, no estimate and no time limit)."""
+        the estimate from the starter's calibration, while it has not run out) ends the run
+        sooner. None when nothing tells yet (no sample settled, no estimate left and no time limit)."""
         if self.stop_at_score is not None and self.best is not None and self.best >= self.stop_at_score:
             return 0.0, "stop_at_score"
         settled_here = self.samples - self.resumed_samples
         rate = settled_here / self.elapsed if self.elapsed and settled_here else 0.0
         by_samples = max(self.max_samples - self.samples, 0) / rate if rate else None
-        if by_samples is None and self.estimated_seconds is not None:
-            by_samples = max(self.estimated_seconds - self.elapsed, 0.0)
+        if by_samples is None and self.estimated_seconds is not None and self.estimated_seconds > self.elapsed:
+            by_samples = self.estimated_seconds - self.elapsed  # an estimate that has run out tells nothing
         by_seconds = max(self.max_seconds - self.elapsed, 0.0) if self.max_seconds else None
         if by_seconds is not None and (by_samples is None or by_seconds <= by_samples):
             return by_seconds, "max_seconds"
@@ -101,7 +103,8 @@ class Snapshot:
         return f"best {self._best()} | {self.evaluations_per_second:.1f} evals/s | steps {self.steps:,}"
 
     def _busy(self) -> str:
-        return f"generator busy {self.generator_busy:.0%} | evaluators busy {self.evaluator_busy:.0%}"
+        calling = f" (call {duration(self.call_seconds)})" if self.call_seconds is not None and self.call_seconds >= 1 else ""
+        return f"generator busy {self.generator_busy:.0%}{calling} | evaluators busy {self.evaluator_busy:.0%}"
 
     def line(self) -> str:
         """All the numbers on one line (the plain progress line)."""
@@ -124,6 +127,7 @@ def snapshot(search: "Search") -> Snapshot:
         generator_busy=totals.generator_busy, evaluator_busy=totals.evaluator_busy,
         max_seconds=search.budget.limit_seconds, stop_at_score=limits.stop_at_score,
         estimated_seconds=search.budget.estimated_seconds, resumed_samples=search.resumed_samples,
+        call_seconds=search.sampler.call_seconds(),
     )
 
 

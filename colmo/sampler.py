@@ -12,6 +12,7 @@ from __future__ import annotations
 import concurrent.futures
 import dataclasses
 import logging
+import time
 from typing import Callable, Optional
 
 from colmo.answers import Answer, AnswerReader, regenerate
@@ -40,6 +41,7 @@ class Sampler:
         self.filler: Optional[Generator] = None
         self.probe: Optional[ProgramProbe] = None  # what mutation asks whether a child runs
         self.failure = ""  # "generator failed: ...", once one has
+        self.calling_since: Optional[float] = None  # when the generator's call in flight began (`time.perf_counter()`)
         self.thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
 
     def needs_evaluator(self) -> bool:
@@ -85,19 +87,27 @@ class Sampler:
     def _generated(self, generator: Generator, prompt: Prompt, n: int, abandon: Callable[[int], bool]) -> Optional[list[Generation]]:
         if generator is self.filler:  # it answers at once, in the search's thread
             return generator.generate(prompt, n)
+        self.calling_since = time.perf_counter()
         generating = self.thread.submit(generator.generate, prompt, n)
-        while not generating.done():
-            if abandon(n):
-                generating.cancel()
-                generator.cancel()
-                return None
-            concurrent.futures.wait([generating], timeout=POLL_S)
         try:
+            while not generating.done():
+                if abandon(n):
+                    generating.cancel()
+                    generator.cancel()
+                    return None
+                concurrent.futures.wait([generating], timeout=POLL_S)
             return generating.result()
         except GeneratorError as error:  # the batches in flight are still integrated
             self.failure = f"generator failed: {error}"
             log.error("%s", self.failure)
             return None
+        finally:
+            self.calling_since = None
+
+    def call_seconds(self) -> Optional[float]:
+        """How long the generator's call in flight has run; None when none is."""
+        since = self.calling_since
+        return None if since is None else time.perf_counter() - since
 
     def stop(self) -> None:
         """Abandon the call in flight."""

@@ -201,7 +201,8 @@ class Search:
             if starter.failure:
                 raise RunError(f"the starter policy in {self.spec.path} fails: {starter.failure}")
             self.store.add(starter)
-        self.program_seconds = starter.evaluation_seconds  # one program's tuning, alone on the workers
+        # One program's tuning, alone on the workers; unknown (0) from a starter with nothing to tune.
+        self.program_seconds = starter.evaluation_seconds if starter.n_params or not tunes_constants(self.cfg.gfo) else 0.0
         return StoredProgram(starter.key, starter.code, starter.score, 0, STARTER_SAMPLE, starter.nodes)
 
     def _replay(self) -> list[SampleRecord]:
@@ -301,6 +302,7 @@ class Search:
         if reset:
             log.info("reset islands %s", reset)
         report = self._report(batch)
+        self.budget.follow_samples(report, self.resumed_samples, self.cfg.search.max_samples)
         self.store.set_elapsed(self.elapsed())  # a run killed later resumes with its time up to here
         log.info(
             "batch %d: samples %d, programs evaluated %d, best %.2f, gen %.1f s, eval %.1f s, evals/s %.1f",
@@ -389,3 +391,4 @@ class Search:
             generation_seconds=batch.generation_seconds, evaluation_seconds=time.perf_counter() - batch.started,
             queue_depth=self.next_batch - batch.index - 1, **dataclasses.asdict(self.totals()),
         )
+

@@ -9,11 +9,13 @@ from __future__ import annotations
 import ast
 import contextlib
 import json
+import logging
 import re
 import sqlite3
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from conftest import compose, run_colmo
@@ -174,3 +176,42 @@ def test_the_referee_cost_counts_lockstep_batches_not_episodes():
     assert referee.seconds(16, 1) == pytest.approx(SAFETY * (16 * 0.01 + 0.3))  # one batch
     assert referee.seconds(100, 2) == pytest.approx(SAFETY * (50 * 0.01 + 4 * 0.3))  # 50 a worker: 4 batches
     assert referee.scaled(2).seconds(100, 2) == pytest.approx(2 * referee.seconds(100, 2))
+
+
+def test_the_estimate_follows_the_samples_settled_and_is_said_again_when_it_moves(caplog):
+    """10 s a sample over the first 10 of 100 samples: 15 minutes more; the same pace later says
+    nothing new; a pace 50% slower moves the end by more than 30% and is said again."""
+    budget = planned_budget(3600, [0])
+    budget.search_starts()
+    start = time.perf_counter()
+    model = dict(tokens_per_second=12.0, generator_busy=0.8, seconds=100.0)
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        budget.follow_samples(SimpleNamespace(samples=10, **model), 0, 100, now=start + 100)
+        assert budget.estimated_seconds == pytest.approx(start + 100 - budget.start + 900, abs=0.1)
+        budget.follow_samples(SimpleNamespace(samples=20, **model), 0, 100, now=start + 200)
+        budget.follow_samples(SimpleNamespace(samples=20, **model), 0, 100, now=start + 300)
+    said = [m for m in caplog.messages if m.startswith("estimated duration, measured on")]
+    assert said == [
+        "estimated duration, measured on 10 samples: search 15m00s more (10.0 s a sample, model calls 8 s each at 12.0 tokens/s); limit that binds: max_samples",
+        "estimated duration, measured on 20 samples: search 20m00s more (15.0 s a sample, model calls 4 s each at 12.0 tokens/s); limit that binds: max_samples",
+    ]
+
+
+def test_the_estimate_says_when_the_time_limit_binds_first(caplog):
+    budget = planned_budget(600, [0])
+    budget.search_starts()
+    start = time.perf_counter()
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        # 10 of 100 samples, 5 of them from an earlier process, 5 in 100 s here: 20 s a sample, 1800 s more.
+        budget.follow_samples(SimpleNamespace(samples=10, tokens_per_second=0.0, generator_busy=0.0, seconds=100.0), 5, 100, now=start + 100)
+    [said] = [m for m in caplog.messages if m.startswith("estimated duration, measured on")]
+    assert said.startswith("estimated duration, measured on 5 samples: search 30m00s more (20.0 s a sample); limit that binds: max_seconds=600 (the search stops in ")
+
+
+def test_a_starter_with_nothing_to_tune_leaves_the_first_estimate_to_the_samples(caplog):
+    cfg = compose("search", "task=quadruped", "evaluation.render=false")
+    budget = TimeBudget(0.0)
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        budget.plan(cfg, (1.0, 1.0), program_seconds=0.0, executor=IdleWorkers())
+    assert budget.estimated_seconds is None
+    assert "estimated duration: search estimated once the first samples are in (the starter has no constants to tune" in caplog.text

@@ -92,6 +92,17 @@ def test_unknown_time_left_reads_as_a_question_mark():
     assert "? left (max_samples)" in state(samples=0).line()
 
 
+def test_an_estimate_that_has_run_out_tells_nothing():
+    # 1000 s estimated, 1200 s passed, no sample in yet: not "0m00s left" while a model still thinks.
+    assert state(samples=0, estimated_seconds=1000.0, elapsed=1200.0).time_left() == (None, "max_samples")
+
+
+def test_the_models_call_in_flight_shows_from_its_first_second():
+    assert "generator busy 25% (call 1m03s) | evaluators busy 93%" in state(call_seconds=63.4).line()
+    assert "generator busy 25% | evaluators" in state(call_seconds=0.2).line()  # mutate answers at once: no flicker
+    assert "(call" not in state().line()
+
+
 def fake_search(max_samples: int = 10, progress_every_s: float = 0.05) -> SimpleNamespace:
     """What `colmo.progress.snapshot` reads from a search (no search runs)."""
     executor = SimpleNamespace(evaluations_done=7, steps_done=70_000)
@@ -102,6 +113,7 @@ def fake_search(max_samples: int = 10, progress_every_s: float = 0.05) -> Simple
         totals=lambda: counters.totals(Elapsed(10.0, 0.5, 1.0), 2),
         budget=SimpleNamespace(limit_seconds=0.0, estimated_seconds=None, elapsed=lambda: 10.0),
         executor=executor, in_flight_samples=2, resumed_samples=0, database=None, cfg=SimpleNamespace(search=limits),
+        sampler=SimpleNamespace(call_seconds=lambda: None),
     )
 
 
