@@ -192,10 +192,12 @@ class TimeBudget:
             self._recent.append((executor.evaluations_done, executor.busy_seconds))
             plan = self._plan_finish()
             limit = f"max_seconds={self.max_seconds:g}"
-            if search is not None and self.deadline_with(cfg.llm.batch_size) - time.perf_counter() >= search:
+            if search is None:
+                limit = f"max_samples={cfg.search.max_samples} or {limit}, whichever comes first"
+            elif self.deadline_with(cfg.llm.batch_size) - time.perf_counter() >= search:
                 limit = "max_samples"
         early = ""
-        if limit.startswith("max_seconds"):
+        if "max_seconds" in limit:
             early = f" (search stops {duration(self.end - self.deadline_with(cfg.llm.batch_size))} early to finish)"
             if not self.can_start(1):
                 early = " (no time left to search: the finish works on the starter)"

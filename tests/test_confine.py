@@ -277,6 +277,13 @@ def test_filter_decisions(machine: str) -> None:
     assert decide("prlimit64", 0, 7, 0, 0x1000) == ALLOW  # getrlimit
     assert decide("prlimit64", 0, 7, 0x1000, 0) == EPERM
     assert decide("prlimit64", 0, 7, 1 << 32, 0) == EPERM
+    assert decide("prlimit64", 1, 7, 0, 0x1000) == EPERM  # another process's limits
+    assert decide("sched_getaffinity", 0, 128, 0x1000) == ALLOW  # its own CPUs (os.cpu_count's fallback)
+    for pid in (1, 1 << 32):
+        assert decide("sched_getaffinity", pid, 128, 0x1000) == EPERM
+        assert decide("prlimit64", pid, 7, 0, 0x1000) == EPERM
+    for name in ("listmount", "statmount", "file_getattr", "mincore"):
+        assert decide(name) == EPERM, name
     assert decide("fcntl", 3, 3) == ALLOW  # F_GETFL
     assert decide("fcntl", 3, 1030) == ALLOW  # F_DUPFD_CLOEXEC
     assert decide("fcntl", 3, 6) == EPERM  # F_SETLK
@@ -546,6 +553,29 @@ def test_networking_is_refused() -> None:
 
     report = probe_results(run_in_child(confined(probe)))
     assert report == dict.fromkeys(report, "EPERM")
+
+
+@needs_seccomp
+def test_what_other_processes_run_with_is_unreadable_and_its_own_is_not() -> None:
+    """Issue 33 finding 7: another process's CPUs and limits, which pages are resident; the
+    child's own CPUs and limits stay readable (glibc and numpy ask for them)."""
+    page = mmap.mmap(-1, mmap.PAGESIZE)
+    address = ctypes.addressof(ctypes.c_char.from_buffer(page))
+    vector = ctypes.create_string_buffer(1)
+    number = syscalls.SYSCALL_NUMBERS[platform.machine()]["mincore"]
+
+    def probe() -> dict:
+        return {
+            "own affinity": outcome(lambda: os.sched_getaffinity(0)),
+            "own limits": outcome(lambda: resource.getrlimit(resource.RLIMIT_NOFILE)),
+            "parent's affinity": outcome(lambda: os.sched_getaffinity(os.getppid())),
+            "parent's limits": outcome(lambda: resource.prlimit(os.getppid(), resource.RLIMIT_NOFILE)),
+            "mincore": libc_outcome(LIBC.syscall(ctypes.c_long(number), ctypes.c_void_p(address), ctypes.c_size_t(mmap.PAGESIZE), vector)),
+        }
+
+    assert outcome(lambda: os.sched_getaffinity(os.getppid())) == "ok"  # unconfined, it can
+    report = probe_results(run_in_child(confined(probe)))
+    assert report == {"own affinity": "ok", "own limits": "ok", "parent's affinity": "EPERM", "parent's limits": "EPERM", "mincore": "EPERM"}
 
 
 @needs_seccomp

@@ -136,6 +136,19 @@ CONFINED_CHILD = ENTER_MODE + textwrap.dedent(
     def posix_timer():
         checked(libc.timer_create(1, None, ctypes.byref(ctypes.c_void_p())))  # CLOCK_MONOTONIC
 
+    import mmap, resource
+    from colmo.sandbox.syscalls import SYSCALL_NUMBERS
+
+    numbers = SYSCALL_NUMBERS[platform.machine()]
+    page = mmap.mmap(-1, mmap.PAGESIZE)
+
+    def resident_pages():  # mincore: a side channel on what other processes read
+        address = ctypes.addressof(ctypes.c_char.from_buffer(page))
+        checked(libc.syscall(ctypes.c_long(numbers["mincore"]), ctypes.c_void_p(address), ctypes.c_size_t(mmap.PAGESIZE), ctypes.create_string_buffer(1)))
+
+    def mount_table():  # listmount(req, buf, nr, flags): invalid arguments, EINVAL were it allowed
+        checked(libc.syscall(ctypes.c_long(numbers["listmount"]), ctypes.c_long(0), ctypes.c_long(0), ctypes.c_long(0), ctypes.c_long(0)))
+
     read_fd, write_fd = os.pipe()
     pid = os.fork()
     if pid == 0:
@@ -155,6 +168,11 @@ CONFINED_CHILD = ENTER_MODE + textwrap.dedent(
                 "coordinator fd": outcome(lambda: read(f"/proc/{coordinator}/fd/{read_fd}")),
                 "process_vm_readv": outcome(vm_read),
                 "unshare user namespace": outcome(lambda: checked(libc.unshare(0x10000000))),
+                # What runs beside it (issue 33 finding 7):
+                "coordinator's CPUs": outcome(lambda: os.sched_getaffinity(coordinator)),
+                "coordinator's limits": outcome(lambda: resource.prlimit(coordinator, resource.RLIMIT_NOFILE)),
+                "resident pages": outcome(resident_pages),
+                "mount table": outcome(mount_table),
                 # What the kernel counts per user, shared with the coordinator and its workers:
                 "a thread": outcome(start_a_thread),
                 "a POSIX timer": outcome(posix_timer),

@@ -52,10 +52,15 @@ thread gets it (threads and children inherit it, and it cannot be removed):
     `setfsuid`, `setfsgid`, `setgroups`, `capset`, `prctl` (all of it: PR_SET_DUMPABLE
     back to 1 would reopen /proc and ptrace), `seccomp` (no further filters),
     `personality`, `lsm_set_self_attr`;
+  - metadata of the system that no policy needs: `listmount`, `statmount` (the mount table
+    without /proc), `file_getattr` (a file's attributes by path), `mincore` (which pages of a
+    mapping are resident: a side channel on what other processes read);
   - limits and scheduling, which would let a child undo the worker's rlimits (soft up to
     hard) or slow the other children of its uid: `setrlimit`, `prlimit64` with a new limit
-    (reading limits stays allowed), `setpriority`, `sched_setparam`, `sched_setscheduler`,
-    `sched_setattr`, `sched_setaffinity`, `ioprio_set`;
+    (reading its own limits stays allowed), `setpriority`, `sched_setparam`,
+    `sched_setscheduler`, `sched_setattr`, `sched_setaffinity`, `ioprio_set`; and what they
+    would read of another process (what runs beside the child): `prlimit64` and
+    `sched_getaffinity` naming any process but itself (pid 0);
   - channels to other processes or to later evaluations: `memfd_create`, `memfd_secret`,
     `mq_open`, `mq_unlink`, `mq_timedsend`, `mq_timedreceive`, `mq_notify`,
     `mq_getsetattr`, `shmget`, `shmat`, `shmctl`, `shmdt`, `semget`, `semop`,
@@ -78,7 +83,7 @@ thread gets it (threads and children inherit it, and it cannot be removed):
 What stays allowed, and why: everything else the computation needs (mmap, munmap, mremap,
 brk, madvise, mprotect, futex, read/write/pread/pwrite/lseek/close/dup on descriptors it
 already has, pipe2, eventfd, epoll, poll, clock_gettime, nanosleep, getrandom, rt_sig*
-on itself, sched_yield, sched_getaffinity, rseq, exit, exit_group; what it creates of
+on itself, sched_yield, sched_getaffinity of itself, rseq, exit, exit_group; what it creates of
 these is bounded by the descriptor and pending-signal limits `colmo.sandbox.confine` sets);
 no threads: a numerical library that starts a thread pool in the child fails (OpenBLAS
 calls exit(), which then hangs until the deadline), so the worker runs with one thread per
@@ -174,9 +179,22 @@ def _allow_commands(command_argument: int, commands: tuple[int, ...]) -> list[In
     ]
 
 
-def _deny_setting_limits() -> list[Instruction]:
-    # prlimit64(pid, resource, new_limit, old_limit): reading (new_limit NULL) stays allowed.
+def _only_own(pid_argument: int) -> list[Instruction]:
+    """Refuse (EPERM) unless the call names the calling process itself (pid 0); falls through
+    otherwise. Reading another process's affinity or limits tells what runs beside the child."""
     return [
+        _statement(BPF_LD_W_ABS, _arg_low(pid_argument)),
+        _jump(BPF_JEQ_K, 0, 0, 2),
+        _statement(BPF_LD_W_ABS, _arg_high(pid_argument)),
+        _jump(BPF_JEQ_K, 0, 1, 0),
+        _statement(BPF_RET_K, _errno(errno.EPERM)),
+    ]
+
+
+def _deny_setting_limits() -> list[Instruction]:
+    # prlimit64(pid, resource, new_limit, old_limit): reading its own (new_limit NULL) stays allowed.
+    return [
+        *_only_own(0),
         _statement(BPF_LD_W_ABS, _arg_low(2)),
         _jump(BPF_JEQ_K, 0, 0, 2),
         _statement(BPF_LD_W_ABS, _arg_high(2)),
@@ -191,6 +209,7 @@ def argument_checks() -> dict[str, list[Instruction]]:
         "fcntl": _deny_commands(1, syscalls.DENIED_FCNTL_COMMANDS),
         "ioctl": _allow_commands(1, syscalls.ALLOWED_IOCTL_COMMANDS),
         "prlimit64": _deny_setting_limits(),
+        "sched_getaffinity": [*_only_own(0), _statement(BPF_RET_K, SECCOMP_RET_ALLOW)],
     }
 
 

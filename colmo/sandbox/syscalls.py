@@ -21,7 +21,7 @@ COMMON_NEW_SYSCALLS = {
     "quotactl_fd": 443, "memfd_secret": 447, "process_mrelease": 448, "fchmodat2": 452,
     "lsm_set_self_attr": 460, "setxattrat": 463, "getxattrat": 464, "listxattrat": 465,
     "removexattrat": 466, "open_tree_attr": 467,
-    "cachestat": 451, "file_setattr": 469,
+    "cachestat": 451, "statmount": 457, "listmount": 458, "file_getattr": 468, "file_setattr": 469,
 }  # fmt: skip
 
 # Only the calls this filter names: arch/x86/entry/syscalls/syscall_64.tbl, scripts/syscall.tbl.
@@ -46,7 +46,7 @@ SYSCALL_NUMBERS: dict[str, dict[str, int]] = {
         "swapoff": 168, "reboot": 169, "sethostname": 170, "setdomainname": 171, "iopl": 172,
         "ioperm": 173, "init_module": 175, "delete_module": 176, "quotactl": 179,
         "setxattr": 188, "lsetxattr": 189, "fsetxattr": 190, "removexattr": 197,
-        "lremovexattr": 198, "fremovexattr": 199, "tkill": 200, "sched_setaffinity": 203,
+        "lremovexattr": 198, "fremovexattr": 199, "tkill": 200, "sched_setaffinity": 203, "sched_getaffinity": 204,
         "semtimedop": 220, "clock_settime": 227, "tgkill": 234, "utimes": 235, "mq_open": 240,
         "mq_unlink": 241, "mq_timedsend": 242, "mq_timedreceive": 243, "mq_notify": 244,
         "mq_getsetattr": 245, "kexec_load": 246, "add_key": 248, "request_key": 249,
@@ -55,7 +55,7 @@ SYSCALL_NUMBERS: dict[str, dict[str, int]] = {
         "unlinkat": 263, "renameat": 264, "linkat": 265, "symlinkat": 266, "fchmodat": 268,
         "unshare": 272, "move_pages": 279, "utimensat": 280, "fallocate": 285, "accept4": 288,
         "inotify_init1": 294, "rt_tgsigqueueinfo": 297, "perf_event_open": 298,
-        "recvmmsg": 299, "fanotify_init": 300, "prlimit64": 302, "name_to_handle_at": 303,
+        "recvmmsg": 299, "fanotify_init": 300, "prlimit64": 302, "mincore": 27, "name_to_handle_at": 303,
         "open_by_handle_at": 304, "clock_adjtime": 305, "sendmmsg": 307, "setns": 308,
         "process_vm_readv": 310, "process_vm_writev": 311, "kcmp": 312, "finit_module": 313,
         "sched_setattr": 314, "renameat2": 316, "seccomp": 317, "memfd_create": 319,
@@ -78,7 +78,7 @@ SYSCALL_NUMBERS: dict[str, dict[str, int]] = {
         "quotactl": 60, "utimensat": 88, "acct": 89, "capset": 91, "personality": 92,
         "unshare": 97, "kexec_load": 104, "init_module": 105, "delete_module": 106,
         "clock_settime": 112, "syslog": 116, "ptrace": 117, "sched_setparam": 118,
-        "sched_setscheduler": 119, "sched_setaffinity": 122, "kill": 129, "tkill": 130,
+        "sched_setscheduler": 119, "sched_setaffinity": 122, "sched_getaffinity": 123, "kill": 129, "tkill": 130,
         "tgkill": 131, "rt_sigqueueinfo": 138, "setpriority": 140, "reboot": 142,
         "setregid": 143, "setgid": 144, "setreuid": 145, "setuid": 146, "setresuid": 147,
         "setresgid": 149, "setfsuid": 151, "setfsgid": 152, "setpgid": 154, "setsid": 157,
@@ -93,7 +93,7 @@ SYSCALL_NUMBERS: dict[str, dict[str, int]] = {
         "sendmsg": 211, "recvmsg": 212, "add_key": 217, "request_key": 218, "keyctl": 219,
         "clone": 220, "execve": 221, "swapon": 224, "swapoff": 225, "migrate_pages": 238,
         "move_pages": 239, "rt_tgsigqueueinfo": 240, "perf_event_open": 241, "accept4": 242,
-        "recvmmsg": 243, "prlimit64": 261, "fanotify_init": 262, "name_to_handle_at": 264,
+        "recvmmsg": 243, "prlimit64": 261, "mincore": 232, "fanotify_init": 262, "name_to_handle_at": 264,
         "open_by_handle_at": 265, "clock_adjtime": 266, "setns": 268, "sendmmsg": 269,
         "process_vm_readv": 270, "process_vm_writev": 271, "kcmp": 272, "finit_module": 273,
         "sched_setattr": 274, "renameat2": 276, "seccomp": 277, "memfd_create": 279,
@@ -146,6 +146,10 @@ DENIED: dict[str, tuple[str, ...]] = {
         "setfsgid", "setgroups", "capset", "prctl", "seccomp", "personality",
         "lsm_set_self_attr",
     ),
+    # What the system and the page cache hold, which no policy needs: the mount table without
+    # /proc (listmount, statmount), a file's attributes by path (file_getattr), and which pages
+    # of a mapping are resident (mincore: a side channel on what other processes read).
+    "metadata": ("listmount", "statmount", "file_getattr", "mincore"),
     "limits and scheduling": (
         "setrlimit", "setpriority", "sched_setparam", "sched_setscheduler", "sched_setattr",
         "sched_setaffinity", "ioprio_set",
