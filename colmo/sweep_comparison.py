@@ -29,6 +29,7 @@ by its id (`sweep_id`).
 from __future__ import annotations
 
 import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Optional
@@ -144,9 +145,25 @@ def variant_lines(jobs: list[JobOutcome], variants: list[str]) -> list[str]:
     return lines
 
 
+def sweep_report(uri: Optional[str], launch_dir: Path, experiments: list[str], sweep_dir: Path, out: Path, command: str) -> Optional[Path]:
+    """colmo-report's report of the sweep (`colmo.report.write_report`) written into `out`, as
+    `command` (the report line) would write it; None when the sweep has no run to report."""
+    from colmo.report import write_report
+    from colmo.track import connect, default_tracking_uri
+    from colmo.track.sweep import sweep_id
+
+    client = connect(uri or default_tracking_uri(launch_dir))
+    try:
+        write_report(client, experiments, out, command=command.removeprefix("report: "), sweep=sweep_id(sweep_dir))
+    except ValueError:  # no finished run with metrics: the failed jobs' lines say why
+        return None
+    return out
+
+
 class CompareJobs(Callback):
     """Prints `comparison_lines` of a sweep once all its jobs have ended, and for a tracked sweep
-    records them in its MLflow parent run (`colmo.track.sweep.record_comparison`); a sweep with a failed
+    records them and its report (`sweep_report`) in its MLflow parent run
+    (`colmo.track.sweep.record_comparison`); a sweep with a failed
     job then ends with `failure_line` and exit code 1 (Hydra notifies callbacks of a sweep's end
     last one first, so this one, declared first in colmo/conf/search.yaml, comes after a user's)."""
 
@@ -162,8 +179,11 @@ class CompareJobs(Callback):
 
             uri = tracked[0].tracking.get("tracking_uri") or None
             experiments = sorted({job.tracking.get("experiment") or job.task for job in tracked})
+            launch_dir = Path(config.hydra.runtime.cwd)
             try:
-                record_comparison(uri, Path(config.hydra.runtime.cwd), experiments, sweep_dir, lines)
+                with tempfile.TemporaryDirectory(prefix="colmo-report-") as scratch:
+                    report = sweep_report(uri, launch_dir, experiments, sweep_dir, Path(scratch) / "report", lines[-1])
+                    record_comparison(uri, launch_dir, experiments, sweep_dir, lines, report)
             except Exception as error:  # MLflow's errors are many; the table is printed and the exit code must follow
                 print(f"colmo: the comparison was not recorded in MLflow: {one_line(error)}", file=sys.stderr, flush=True)
         failed = failure_line(jobs)

@@ -41,6 +41,12 @@ def test_a_sweep_ends_with_one_line_per_job_and_the_command_of_its_report(tmp_pa
     assert [child.data.tags["colmo.stop_reason"] for child in children] == ["max_samples"] * 2  # which limit each reached
     recorded = Path(client.download_artifacts(parents[0].info.run_id, "comparison.txt", str(tmp_path)))
     assert recorded.read_text().splitlines() == lines[start: start + 5]  # the table the sweep printed, in its parent run
+    # ... and the sweep's report, as its report line would write it: Table I and the figures.
+    artifacts = {artifact.path for artifact in client.list_artifacts(parents[0].info.run_id, "report")}
+    assert {"report/report.md", "report/best_so_far.png", "report/best_so_far_seconds.png"} <= artifacts, artifacts
+    parent_report = Path(client.download_artifacts(parents[0].info.run_id, "report/report.md", str(tmp_path))).read_text()
+    assert "## Table I" in parent_report and "2 search runs read from MLflow" in parent_report
+    assert f"`{report.removeprefix('report: ')}`" in parent_report
     # An unrelated run beside the sweep: the printed command still compares exactly its 2 jobs.
     assert run_colmo("colmo", *TINY, "seed=2", cwd=tmp_path, timeout=600).returncode == 0
     out = tmp_path / "report"
@@ -140,6 +146,7 @@ def test_a_comparison_mlflow_cannot_record_still_ends_the_sweep_with_its_exit_co
         raise ConnectionError("server gone")
 
     monkeypatch.setattr(tracked_sweep, "record_comparison", server_gone)
+    monkeypatch.setattr(sweep_comparison, "sweep_report", server_gone)
     config = OmegaConf.create({"hydra": {"sweep": {"dir": "sweep"}, "runtime": {"cwd": str(tmp_path)}}})
     with pytest.raises(SystemExit) as stop:
         sweep_comparison.CompareJobs().on_multirun_end(config)

@@ -9,8 +9,9 @@ overrides (from Hydra's `multirun.yaml`) and, after each job, the best `best_sco
 `best_heldout_score` over its children and their count (`runs`); its status is RUNNING while a
 child runs, else FAILED or KILLED if a child did, else FINISHED (between two jobs of the basic
 launcher it is briefly FINISHED). At the sweep's end it receives the comparison the sweep
-printed (`record_comparison`): `comparison.txt`, and each setting's mean and difference with its
-interval as the tag `colmo.comparison`.
+printed (`record_comparison`): `comparison.txt`, each setting's mean and difference with its
+interval as the tag `colmo.comparison`, and colmo-report's report of the sweep (`report/`:
+`report.md` with Table I and the comparison tables, the best-so-far figures).
 """
 
 from __future__ import annotations
@@ -75,13 +76,18 @@ def update_parent(client: MlflowClient, experiment_id: str, parent_id: str, swee
 
 COMPARISON_FILE = "comparison.txt"
 COMPARISON_TAG = "colmo.comparison"
+REPORT_ARTIFACTS = "report"
 
 
-def record_comparison(uri: Optional[str], launch_dir: Path, experiments: list[str], sweep_dir: Path, lines: list[str]) -> None:
+def record_comparison(
+    uri: Optional[str], launch_dir: Path, experiments: list[str], sweep_dir: Path, lines: list[str], report: Optional[Path] = None,
+) -> None:
     """The end-of-sweep comparison (`colmo.sweep_comparison.comparison_lines`) in the sweep's
-    parent run in each of `experiments`: the whole text as `comparison.txt`, and its lines of
+    parent run in each of `experiments`: the whole text as `comparison.txt`, its lines of
     settings compared (each one's mean over seeds, its difference to the first with the interval)
-    as the tag `colmo.comparison`, which the run list can show, so that one page tells the winner."""
+    as the tag `colmo.comparison`, which the run list can show, so that one page tells the winner,
+    and the directory `report` (colmo-report's Table I, comparison tables and figures) as the
+    artifacts `report/`."""
     client = connect(uri or default_tracking_uri(launch_dir))
     ids = [experiment.experiment_id for name in experiments if (experiment := client.get_experiment_by_name(name)) is not None]
     parents = retry_locked(client.search_runs, ids, f"tags.`{SWEEP_TAG}` = '{sweep_id(sweep_dir)}'") if ids else []
@@ -91,3 +97,5 @@ def record_comparison(uri: Optional[str], launch_dir: Path, experiments: list[st
         client.log_text(parent.info.run_id, "\n".join(lines) + "\n", COMPARISON_FILE)
         if settings:
             retry_locked(client.set_tag, parent.info.run_id, COMPARISON_TAG, settings[:MAX_TAG_VAL_LENGTH])
+        if report is not None:
+            client.log_artifacts(parent.info.run_id, str(report), REPORT_ARTIFACTS)
