@@ -34,7 +34,7 @@ import threading
 import time
 from collections import deque
 from pathlib import Path
-from typing import Callable, Optional
+from typing import Callable, Optional, Sequence
 
 from colmo.config import SearchConfig
 from colmo.evaluation import Executor
@@ -208,18 +208,27 @@ class TimeBudget:
             what += ", generation measured on the first samples)" if cfg.llm.name != "mutate" else ")"
         log.info("estimated duration: search %s, finish %s; limit that binds: %s%s", what, duration(plan.seconds), limit, early)
 
-    def follow_samples(self, totals: Totals, resumed_samples: int, max_samples: int, now: Optional[float] = None) -> None:
-        """The search's end re-estimated from the samples settled so far (`totals.samples`, of
-        which `resumed_samples` in an earlier process), at the time those of this process took
-        since the first batch, generation, tuning and waiting included; said in one line the first
-        time and whenever it moves by more than 30%, with what the model calls took. `now`:
-        `time.perf_counter()` unless given."""
-        samples, settled_here = totals.samples, totals.samples - resumed_samples
-        if self._searching is None or settled_here < 1:
+    def follow_samples(
+        self, totals: Totals, resumed_samples: int, max_samples: int, settled: tuple[int, float], in_flight: Sequence[tuple[int, float]],
+        now: Optional[float] = None,
+    ) -> None:
+        """The search's end re-estimated as a batch settles (`settled`: its samples and when its
+        generation began, `time.perf_counter()`; `in_flight`: the batches still evaluating,
+        likewise; `totals.samples` settled so far, `resumed_samples` of them in an earlier
+        process). The pace is Little's law: the samples in the pipeline (the batch and those
+        still in flight) over the batch's time in it, generation, tuning and waiting included, so
+        that the samples that started beside it count as well as those that finished with it.
+        The time left is the samples not started yet at that pace, or the end of those in flight,
+        whichever is later. Said in one line the first time and whenever it moves by more than
+        30%, with what the model calls take. `now`: `time.perf_counter()` unless given."""
+        if self._searching is None or totals.samples - resumed_samples < 1:
             return
         now = time.perf_counter() if now is None else now
-        per_sample = (now - self._searching) / settled_here
-        left = max(max_samples - samples, 0) * per_sample
+        size, began = settled
+        in_system = now - began
+        flying = sum(count for count, _ in in_flight)
+        per_sample = in_system / (size + flying)
+        left = max(max(max_samples - totals.samples - flying, 0) * per_sample, max((start + in_system - now for _, start in in_flight), default=0.0))
         self.estimated_seconds = now - self.start + left
         if self._said is not None and abs(now + left - self._said[1]) <= _RESAY * max(self._said[1] - self._said[0], per_sample):
             return
@@ -229,10 +238,10 @@ class TimeBudget:
             binds = f"max_seconds={self.max_seconds:g} (the search stops in {duration(max(self.deadline - now, 0.0))})"
         model = ""
         if totals.tokens_per_second:  # a language model: what its calls take
-            model = f", model calls {totals.generator_busy * totals.seconds / samples:.0f} s each at {totals.tokens_per_second:.1f} tokens/s"
+            model = f", model calls {totals.generator_busy * totals.seconds / totals.samples:.0f} s each at {totals.tokens_per_second:.1f} tokens/s"
         log.info(
-            "estimated duration, measured on %d samples: search %s more (%.1f s a sample%s); limit that binds: %s",
-            settled_here, duration(left), per_sample, model, binds,
+            "estimated duration after %d samples: search %s more (%.1f s a sample%s); limit that binds: %s",
+            totals.samples, duration(left), per_sample, model, binds,
         )
 
     def _plan_finish(self) -> FinishPlan:

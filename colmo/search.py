@@ -302,7 +302,9 @@ class Search:
         if reset:
             log.info("reset islands %s", reset)
         report = self._report(batch)
-        self.budget.follow_samples(report, self.resumed_samples, self.cfg.search.max_samples)
+        began = lambda batch: batch.started - batch.generation_seconds  # noqa: E731 - when it entered the pipeline
+        pipeline = [(len(b.outcomes), began(b)) for b in self.in_flight]
+        self.budget.follow_samples(report, self.resumed_samples, self.cfg.search.max_samples, (len(records), began(batch)), pipeline)
         self.store.set_elapsed(self.elapsed())  # a run killed later resumes with its time up to here
         log.info(
             "batch %d: samples %d, programs evaluated %d, best %.2f, gen %.1f s, eval %.1f s, evals/s %.1f",

@@ -178,34 +178,42 @@ def test_the_referee_cost_counts_lockstep_batches_not_episodes():
     assert referee.scaled(2).seconds(100, 2) == pytest.approx(2 * referee.seconds(100, 2))
 
 
-def test_the_estimate_follows_the_samples_settled_and_is_said_again_when_it_moves(caplog):
-    """10 s a sample over the first 10 of 100 samples: 15 minutes more; the same pace later says
-    nothing new; a pace 50% slower moves the end by more than 30% and is said again."""
-    budget = planned_budget(3600, [0])
+def said_estimates(budget: TimeBudget, settles, caplog) -> list[str]:
+    """The estimate lines `budget` says for `settles`: (seconds after the search's start, samples
+    settled, the batch settling (its samples, seconds after the start its generation began), the
+    batches in flight likewise, tokens/s)."""
     budget.search_starts()
     start = time.perf_counter()
-    model = dict(tokens_per_second=12.0, generator_busy=0.8, seconds=100.0)
     with caplog.at_level(logging.INFO, logger="colmo.search"):
-        budget.follow_samples(SimpleNamespace(samples=10, **model), 0, 100, now=start + 100)
-        assert budget.estimated_seconds == pytest.approx(start + 100 - budget.start + 900, abs=0.1)
-        budget.follow_samples(SimpleNamespace(samples=20, **model), 0, 100, now=start + 200)
-        budget.follow_samples(SimpleNamespace(samples=20, **model), 0, 100, now=start + 300)
-    said = [m for m in caplog.messages if m.startswith("estimated duration, measured on")]
-    assert said == [
-        "estimated duration, measured on 10 samples: search 15m00s more (10.0 s a sample, model calls 8 s each at 12.0 tokens/s); limit that binds: max_samples",
-        "estimated duration, measured on 20 samples: search 20m00s more (15.0 s a sample, model calls 4 s each at 12.0 tokens/s); limit that binds: max_samples",
+        for at, samples, (size, began), flying, tokens in settles:
+            totals = SimpleNamespace(samples=samples, tokens_per_second=tokens, generator_busy=0.5, seconds=at)
+            budget.follow_samples(totals, 0, 16, (size, start + began), [(n, start + b) for n, b in flying], now=start + at)
+    return [m.split("estimated duration after ", 1)[1] for m in caplog.messages if m.startswith("estimated duration after")]
+
+
+def test_the_pace_counts_the_samples_that_started_beside_the_first_batch(caplog):
+    """The quadruped's measured run: two batches of 4 started together and settled at 164 s. The
+    first batch's 164 s in the pipeline held 8 samples: 20.5 s a sample, 8
+    samples not started yet, 2m44s more (the run took 2m30s more; counting the first batch
+    alone said 8m12s). The same pace later says nothing new; an end that moves by more than 30%
+    is said again."""
+    settles = [
+        (164.0, 4, (4, 0.0), [(4, 0.1)], 0.0),
+        (164.2, 8, (4, 0.1), [(4, 164.0), (4, 164.1)], 0.0),  # the next two batches began as the first settled
+        (500.0, 12, (4, 164.0), [(4, 164.1)], 0.0),  # slower: 336 s in the pipeline; the last batch began beside it
+    ]
+    assert said_estimates(planned_budget(3600, [0]), settles, caplog) == [
+        "4 samples: search 2m44s more (20.5 s a sample); limit that binds: max_samples",
+        "12 samples: search 0m00s more (42.0 s a sample); limit that binds: max_samples",
     ]
 
 
-def test_the_estimate_says_when_the_time_limit_binds_first(caplog):
-    budget = planned_budget(600, [0])
-    budget.search_starts()
-    start = time.perf_counter()
-    with caplog.at_level(logging.INFO, logger="colmo.search"):
-        # 10 of 100 samples, 5 of them from an earlier process, 5 in 100 s here: 20 s a sample, 1800 s more.
-        budget.follow_samples(SimpleNamespace(samples=10, tokens_per_second=0.0, generator_busy=0.0, seconds=100.0), 5, 100, now=start + 100)
-    [said] = [m for m in caplog.messages if m.startswith("estimated duration, measured on")]
-    assert said.startswith("estimated duration, measured on 5 samples: search 30m00s more (20.0 s a sample); limit that binds: max_seconds=600 (the search stops in ")
+def test_a_model_bound_estimate_says_what_the_calls_take_and_when_the_time_limit_binds(caplog):
+    # Generated one batch at a time: 4 samples 110 s after their generation began, none in flight.
+    settles = [(110.0, 4, (4, 0.0), [], 12.0)]
+    [said] = said_estimates(planned_budget(300, [0]), settles, caplog)
+    assert said.startswith("4 samples: search 5m30s more (27.5 s a sample, model calls 14 s each at 12.0 tokens/s); "
+                           "limit that binds: max_seconds=300 (the search stops in ")
 
 
 def test_a_starter_with_nothing_to_tune_leaves_the_first_estimate_to_the_samples(caplog):
