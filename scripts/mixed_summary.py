@@ -15,12 +15,16 @@ from pathlib import Path
 from colmo.comparison import mean_std
 
 
+def _score(value: float | None) -> str:
+    return "—" if value is None else f"{value:.1f}"
+
+
 def row(path: Path) -> dict:
     summary = json.loads(path.read_text())
     task, variant, seed = path.parts[-5], path.parts[-4], path.parts[-3]
     simplified = summary.get("simplified") or {}
     split = ", ".join(
-        f"{name} {entry['samples']} ({entry['programs_evaluated']} evaluated, best {entry['best_score']})"
+        f"{name} {entry['samples']} ({entry['programs_evaluated']} evaluated, best {_score(entry['best_score'])})"
         for name, entry in summary.get("by_generator", {}).items()
     )
     return {
