@@ -19,7 +19,7 @@ from colmo.database import identity
 from colmo.generate import Generation
 from colmo.intake import Unusable, read_program
 from colmo.program import ParametricProgram
-from colmo.prompt import Prompt
+from colmo.prompt import Prompt, copied_feedback, unusable_feedback
 from colmo.sandbox.check import ForbiddenProgram
 
 log = logging.getLogger("colmo.search")
@@ -67,13 +67,7 @@ def _duplicate_feedback(answer: Answer, by_structure: bool) -> str:
     assert isinstance(answer.reading, ParametricProgram)
     shown = answer.prompt.parent_keys
     key = answer.reading.key
-    copied = f"`policy_v{shown.index(key)}`" if key in shown else "a program evaluated before"
-    if by_structure:
-        return (
-            f"Your `policy` is {copied} with other numbers. The numbers are tuned automatically, so it would score the same. "
-            "Write a `policy` with another structure: other terms, conditions or functions of the observation."
-        )
-    return f"Your `policy` is {copied} again. Write a different `policy`."
+    return copied_feedback(shown.index(key) if key in shown else None, by_structure)
 
 
 def _faults(answers: Sequence[Answer], is_known: Callable[[str], bool], by_structure: bool, unreadable: bool) -> dict[int, str]:
@@ -89,7 +83,7 @@ def _faults(answers: Sequence[Answer], is_known: Callable[[str], bool], by_struc
                 faults[i] = _duplicate_feedback(answer, by_structure)
             keys.add(key)
         elif unreadable:
-            faults[i] = f"Your answer cannot be used: {answer.reading}. Write `policy` again, corrected, in one ```python block."
+            faults[i] = unusable_feedback(str(answer.reading))
     return faults
 
 

@@ -11,7 +11,9 @@ change; without GFO (`gfo=none`, the programs run as written) nothing of the kin
 Both forms ask for a version that differs from every one shown: small models otherwise
 copy the last version (most answers of a 1.5B model were copies, docs/llm-duplicates.md).
 An answer that brings no new program is followed up in the chat form (`Prompt.followed_up`:
-the model's answer and what was wrong with it, `colmo.answers`).
+the model's answer and what was wrong with it, `colmo.answers`, in the words of
+`copied_feedback` and `unusable_feedback`): every sentence the model is sent is in this module.
+Each program is shown cleaned for reading (`readable`).
 
 Helpers the programs define (module-level functions, classes, constants) are shown once,
 above the versions. A helper that differs from one already shown under the same name, or
@@ -26,11 +28,12 @@ from __future__ import annotations
 import ast
 import copy
 import dataclasses
+import functools
 import math
 import re
 from collections import deque
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Optional, Sequence
 
 from colmo import astutil
 from colmo.astutil import bound_names, identifiers, is_docstring, rename
@@ -63,6 +66,23 @@ class Prompt:
         parents). Only the last answer is kept: a longer conversation would only be slower."""
         messages = [*self.messages[:2], {"role": "assistant", "content": answer}, {"role": "user", "content": feedback}]
         return dataclasses.replace(self, messages=messages, retry=retry)
+
+
+def copied_feedback(version: Optional[int], constants_tuned: bool) -> str:
+    """What a chat model is told of an answer whose program is known: the shown `policy_v<version>`
+    it copied, or (None) a program evaluated before; with GFO, that its numbers are tuned anyway."""
+    copied = f"`policy_v{version}`" if version is not None else "a program evaluated before"
+    if constants_tuned:
+        return (
+            f"Your `policy` is {copied} with other numbers. The numbers are tuned automatically, so it would score the same. "
+            "Write a `policy` with another structure: other terms, conditions or functions of the observation."
+        )
+    return f"Your `policy` is {copied} again. Write a different `policy`."
+
+
+def unusable_feedback(reason: str) -> str:
+    """What a chat model is told of an answer no program could be read from, and why."""
+    return f"Your answer cannot be used: {reason}. Write `policy` again, corrected, in one ```python block."
 
 
 def _system_message(function_name: str, args: str, constants_tuned: bool, allowed_imports: Sequence[str]) -> str:
@@ -126,9 +146,10 @@ def build_prompt(
     assert all(math.isfinite(program.score) for program in programs), "failed programs are never shown"
     assert all(a.score <= b.score for a, b in zip(programs, programs[1:])), "programs must be in ascending score"
 
-    imports, definitions, versions, args = _render([program.code for program in programs], function_name)
+    codes = [readable(program.code, function_name) for program in programs]
+    imports, definitions, versions, args = _render(codes, function_name)
     new, previous = f"{function_name}_v{len(programs)}", f"{function_name}_v{len(programs) - 1}"
-    blind = _blind_versions([program.code for program in programs], function_name, new)
+    blind = _blind_versions(codes, function_name, new)
     docstring = f'"""{description.strip()}\n\n{_instructions(new, previous, function_name, constants_tuned, blind)}\n"""'
     shown_code = "\n\n\n".join(["\n".join(imports), *definitions, *versions])
     context = docstring + "\n\n" + shown_code
@@ -150,6 +171,22 @@ def build_prompt(
         island=selection.island,
         parent_keys=[program.key for program in programs],
     )
+
+
+@functools.lru_cache(maxsize=64)  # the programs prompts show again and again: cleaned once
+def readable(code: str, function_name: str = "policy") -> str:
+    """`code` as a prompt shows it: without its dead code, literal arithmetic folded
+    (`colmo.simplify.deadcode`, for reading: static, the same actions, the policy's docstring
+    and named constants kept), so that what mutation left in a program (unused assignments,
+    branches on constant conditions) does not stand between the model and its structure; `code`
+    itself where the clean-up cannot read it."""
+    # Imported here: the simplify package's own imports (its sandboxed stages) lead back to this module.
+    from colmo.simplify.deadcode import remove_dead_code
+
+    try:
+        return remove_dead_code(code, function_name, for_reading=True)
+    except (SyntaxError, RecursionError, ValueError):
+        return code
 
 
 def _render(codes: list[str], function_name: str) -> tuple[list[str], list[str], list[str], str]:

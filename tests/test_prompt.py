@@ -328,3 +328,35 @@ def test_versions_that_never_read_their_observation_are_named_in_both_forms():
     assert sentence in blind.text and sentence in blind.messages[1]["content"]
     seeing = build_prompt(DESCRIPTION, Selection(0, [HIGH, uses_a_helper]))
     assert "ignore" not in seeing.text and "ignore" not in seeing.messages[1]["content"]
+
+
+MUTATED = '''import math
+import numpy as np
+
+def policy(obs):
+    """obs size is 3. return shape is ()."""
+    unused = np.sin(obs[0]) * 4.0
+    total = 0.0
+    total += -2.0 * 1.5 * obs[2]
+    if 3 > 2:
+        gain = 2 * math.pi
+    else:
+        gain = 0.5
+    return float(np.clip(total + gain * obs[1], -1.0, 1.0))
+'''
+
+
+def test_a_mutated_program_is_shown_without_what_mutation_left_in_it():
+    """What a prompt shows is the program cleaned for reading (colmo.simplify.deadcode): the
+    unused assignment, the branch on a constant condition and the accumulator's start go; its
+    docstring (the observation and action sizes) and `2 * math.pi` stay as written. The prompt
+    still names the stored program as its parent."""
+    program = stored(MUTATED, 5.0)
+    prompt = build_prompt("Task.", Selection(0, [program]))
+    shown = prompt.shown_code
+    assert '"""obs size is 3. return shape is ()."""' in shown
+    assert "gain = 2 * math.pi" in shown and "total = -3.0 * obs[2]" in shown
+    assert "unused" not in shown and "3 > 2" not in shown and "0.5" not in shown
+    assert prompt.programs == [MUTATED] and prompt.parent_keys == [program.key]
+    for showing in (prompt.text, prompt.messages[1]["content"]):
+        assert shown in showing

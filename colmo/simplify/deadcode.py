@@ -341,16 +341,20 @@ def _module_liveness(tree: ast.Module, scope: Scope, function_name: str) -> None
     tree.body, _ = _Liveness(scope, pinned).block(tree.body, read_by_functions, _Flow())
 
 
-def remove_dead_code(code: str, function_name: str = "policy") -> str:
+def remove_dead_code(code: str, function_name: str = "policy", for_reading: bool = False) -> str:
     """`code` without dead code and with literal arithmetic folded, as `ast.unparse` writes it
-    (see the module docstring for what goes); the program computes the same actions."""
+    (see the module docstring for what goes); the program computes the same actions.
+    `for_reading`: as a prompt shows a program, the docstring of `function_name` kept (a task's
+    starter says there what the observation and the action are) and named constants left
+    unfolded (`2 * math.pi`, not `6.283185307179586`)."""
     tree = astutil.parse(code)
+    docstring = _docstring_of(tree, function_name) if for_reading else None
     strip_docstrings(tree)
     before = ast.dump(tree)
     for _ in range(100):  # each pass only removes; the bound is a guard
         fold_accumulator_starts(tree)
         scope = Scope(tree)
-        tree = Fold(scope).visit(tree)
+        tree = Fold(scope, named=not for_reading).visit(tree)
         tree.body = _Statements(scope).block(tree.body, keep_empty=True)
         for node in ast.walk(tree):
             if isinstance(node, FUNCTIONS):
@@ -363,5 +367,14 @@ def remove_dead_code(code: str, function_name: str = "policy") -> str:
         if dump == before:
             break
         before = dump
+    if docstring is not None:
+        function = next((node for node in tree.body if isinstance(node, FUNCTIONS) and node.name == function_name), None)
+        if function is not None:
+            function.body = [ast.Expr(ast.Constant(docstring)), *(s for s in function.body if not isinstance(s, ast.Pass))]
     return ast.unparse(ast.fix_missing_locations(tree))
+
+
+def _docstring_of(tree: ast.Module, function_name: str) -> Optional[str]:
+    function = next((node for node in tree.body if isinstance(node, FUNCTIONS) and node.name == function_name), None)
+    return None if function is None else ast.get_docstring(function, clean=False)
 

@@ -63,10 +63,14 @@ def undouble(node: ast.expr) -> ast.expr:
 class Fold(ast.NodeTransformer):
     """Bottom-up constant folding of a module whose names `scope` resolves (module docstring)."""
 
-    def __init__(self, scope: Scope):
-        self.scope = scope
+    def __init__(self, scope: Scope, named: bool = True):
+        """`named`: also fold the named constants (`np.pi`); without, literals only, so that
+        `2 * math.pi` stays as a person wrote it."""
+        self.scope, self.named = scope, named
 
     def _evaluate(self, function: Callable[..., object], *operands: ast.AST) -> Optional[ast.expr]:
+        if not self.named and not all(is_number_literal(o) or isinstance(o, ast.Constant) for o in operands):
+            return None
         values = [self.scope.value(operand) for operand in operands]
         if any(value is NOT_A_LITERAL for value in values):
             return None
