@@ -60,7 +60,7 @@ def main(cfg: SearchConfig) -> Optional[float]:
     result there and resumes every other one from its store (`resume=`, with the same checks)."""
     from hydra.types import RunMode
 
-    from colmo.budget import job_start
+    from colmo.timelimit import job_start
 
     sweep_job = HydraConfig.get().mode == RunMode.MULTIRUN
     started = job_start(sweep_job)  # before the heavy imports, which are the job's start-up

@@ -10,7 +10,7 @@ rendered (`colmo.render`) on its first held-out episode, into the run directory;
 optional, and none can fail the search: a missing OpenGL or a simplification that finds
 nothing to remove is a line in the log and in the summary.
 
-With `search.max_seconds`, the whole run (from its job's start: `colmo.budget.job_start`) must end by the limit,
+With `search.max_seconds`, the whole run (from its job's start: `colmo.timelimit.job_start`) must end by the limit,
 this work included: `plan_finish` estimates what each step costs from what the referee costs
 (`RefereeCost`: per episode, and per lockstep batch of episodes, measured on the starter and the
 search's programs) and, where the full work does not fit in the time it is given,

@@ -35,7 +35,7 @@ class SampleOutcomes:
         observe: Callable[[ProgramResult], None] = lambda result: None,
     ):
         self.cfg = cfg
-        self.observe = observe  # told every program's result (what its final scores cost: `colmo.budget`)
+        self.observe = observe  # told every program's result (what its final scores cost: `colmo.timelimit`)
         self.store = store
         self.executor = executor
         self.evaluator: Optional[Evaluator] = None

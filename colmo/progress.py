@@ -26,7 +26,7 @@ from rich.logging import RichHandler
 from rich.progress_bar import ProgressBar
 from rich.table import Table
 
-from colmo.budget import duration
+from colmo.timelimit import duration
 
 if TYPE_CHECKING:
     from colmo.search import Search

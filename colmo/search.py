@@ -24,8 +24,8 @@ found and mutation works on what the model wrote. The mix depends on timing, so 
 longer a deterministic function of its seed.
 
 Stopping: `search.max_samples`, `search.stop_at_score`, and `search.max_seconds`, a wall-clock
-limit of the whole run from its `started` (the job's start: `colmo.budget.job_start`), with the search's own deadline before it
-(`colmo.budget`: the finish's time and the programs in flight left over). At the search's
+limit of the whole run from its `started` (the job's start: `colmo.timelimit.job_start`), with the search's own deadline before it
+(`colmo.timelimit`: the finish's time and the programs in flight left over). At the search's
 deadline a generation in flight is abandoned and programs in flight stop tuning at their next
 candidate, their best so far scored and stored (`cut_short`). Ctrl-C and SIGTERM do the same; a
 second one cancels the evaluations in flight, whose samples are stored as `interrupted` and
@@ -46,7 +46,6 @@ from pathlib import Path
 from typing import Optional
 
 from colmo.answers import AnswerReader
-from colmo.budget import TimeBudget
 from colmo.config import SearchConfig
 from colmo.database import ProgramDatabase, StoredProgram
 from colmo.errors import RunError
@@ -77,6 +76,7 @@ from colmo.sampler import POLL_S, Sampler
 from colmo.signals import stop_signals
 from colmo.specs import Spec, load_task_spec
 from colmo.store import StoreError, open_run, run_settings, write_outputs
+from colmo.timelimit import TimeBudget
 
 log = logging.getLogger("colmo.search")
 

@@ -20,10 +20,10 @@ from types import SimpleNamespace
 import pytest
 from conftest import compose, run_colmo
 
-from colmo.budget import TimeBudget, job_start, process_seconds
 from colmo.finish import SAFETY, RefereeCost, plan_finish
 from colmo.render import PLOT_FILE, VIDEO_FILE
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, STORE_FILE, SUMMARY_FILE
+from colmo.timelimit import TimeBudget, job_start, process_seconds
 
 
 @dataclass

@@ -155,7 +155,7 @@ class ProgramResult:
     seconds: float
     size: ProgramSize
     # Worker seconds of scoring the final constants (the rounded ones on the fast path, then the
-    # referee): what a program still costs once its tuning stops (`colmo.budget`).
+    # referee): what a program still costs once its tuning stops (`colmo.timelimit`).
     scoring_seconds: float = 0.0
 
     @property
