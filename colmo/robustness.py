@@ -150,6 +150,43 @@ def robustness_report(
     return RobustnessReport(score(PerturbConfig()), magnitudes, tuple(points), delays)
 
 
+def precise(report: RobustnessReport, precision: float) -> bool:
+    """Whether every scored point's interval, the nominal one's included, is within `precision`
+    times the nominal score's magnitude (points that failed have none and never will)."""
+    nominal = report.nominal_score
+    if nominal is None:
+        return True
+    intervals = [Point(ALL, 0.0, report.nominal).interval, *(point.interval for point in report.points)]
+    return all(interval is None or interval <= precision * abs(nominal) for interval in intervals)
+
+
+def adaptive_report(
+    score: Callable[[PerturbConfig, int, int], Evaluation], magnitudes: Sequence[float], delays: Sequence[int], episodes: int,
+    precision: Optional[float] = None, max_episodes: Optional[int] = None,
+) -> RobustnessReport:
+    """`robustness_report` on the first `episodes` episodes (`score(perturb, start, stop)`: a
+    point's evaluation on episodes start..stop-1). With `precision`, more episodes for every
+    point, doubling, until the report is `precise` or `max_episodes` are scored: every point gets
+    the same episodes, so that the points stay paired; a point that failed is not run again."""
+    scored: dict[str, Evaluation] = {}
+    span = (0, episodes)
+
+    def score_so_far(perturb: PerturbConfig) -> Evaluation:
+        earlier = scored.get(repr(perturb))
+        if earlier is not None and earlier.failure:
+            return earlier
+        part = score(perturb, *span)
+        scored[repr(perturb)] = part if earlier is None else Evaluation.joined([earlier, part])
+        return scored[repr(perturb)]
+
+    report = robustness_report(score_so_far, magnitudes, delays)
+    most = max(episodes, max_episodes or episodes)
+    while precision is not None and span[1] < most and not precise(report, precision):
+        span = (span[1], min(2 * span[1], most))
+        report = robustness_report(score_so_far, magnitudes, delays)
+    return report
+
+
 def _cell(value: Optional[float], interval: Optional[float], sign: str = "") -> str:
     if value is None or not math.isfinite(value):
         return "failed"

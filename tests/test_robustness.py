@@ -122,7 +122,7 @@ def test_out_of_range_magnitudes_are_configuration_errors():
 
 def test_colmo_evaluate_robustness_reports_each_magnitude_nominal_first_and_repeats(tmp_path, examples):
     overrides = (
-        "task=pendulum", f"policy_file={examples / 'paper_pendulum.py'}", "robustness=true", "episodes=2",
+        "task=pendulum", f"policy_file={examples / 'paper_pendulum.py'}", "robustness=true", "episodes=3",
         "robustness_episodes=2", "robustness_magnitudes=[0.1,0.4]", "robustness_delays=[2]",
     )
     results = []
@@ -131,6 +131,7 @@ def test_colmo_evaluate_robustness_reports_each_magnitude_nominal_first_and_repe
         assert run.returncode == 0, run.stderr[-2000:]
         results.append(last_json_line(run.stdout))
     first, second = results
+    assert (first["episodes"], len(first["returns"]), first["robustness_episodes"]) == (3, 3, 2)  # the held-out score's, the grid's
     assert [entry["magnitude"] for entry in first["robustness"]] == [0.0, 0.1, 0.4]
     assert [entry["delay_steps"] for entry in first["delay"]] == [0, 2]
     assert first["robustness"] == second["robustness"] and first["delay"] == second["delay"]
@@ -217,3 +218,31 @@ def test_a_search_under_a_perturbation_is_a_run_of_its_own():
     nominal, perturbed = run_settings(compose("search")), run_settings(compose("search", "task.perturb.mass=0.2"))
     assert "task.perturb" not in nominal  # runs from before task.perturb existed still resume
     assert perturbed["task.perturb"]["mass"] == 0.2 and perturbed != nominal
+
+
+def test_with_a_precision_every_point_gets_more_episodes_until_its_interval_holds_it():
+    """Episode i returns 500 ± 100 (a fixed spread), every point alike less its loss: at 4
+    episodes the interval is ±183.7 (37% of nominal), at 8 ±89.4, at 16 ±55.0 (11%), at 32
+    ±36.6, within 10%: there it stops; the same episodes for every point, so the changes stay
+    paired (exact).
+    A point that fails is not run again; without a precision, or at the cap, no more are added."""
+    from colmo.evaluation import Evaluation
+    from colmo.robustness import adaptive_report, precise
+
+    asked: list[tuple[str, int, int]] = []
+
+    def score(perturb: PerturbConfig, start: int, stop: int) -> Evaluation:
+        asked.append((repr(perturb), start, stop))
+        if perturb.delay == 3:
+            return Evaluation(failure="exception: ValueError: x (step 1)")
+        loss = 0.0 if perturb == PerturbConfig() else 50.0
+        return Evaluation(tuple(500.0 + 100.0 * (-1) ** i - loss for i in range(start, stop)))
+
+    report = adaptive_report(score, [0.1], [2, 3], episodes=4, precision=0.1, max_episodes=100)
+    assert len(report.nominal.returns) == 32 and precise(report, 0.1)
+    assert all(len(point.evaluation.returns) == 32 for point in report.points if point.score is not None)
+    assert report.change(report.point("mass", 0.1)) == pytest.approx(-50.0) and report.change_interval(report.point("mass", 0.1)) == pytest.approx(0.0)
+    assert sorted({(start, stop) for _, start, stop in asked}) == [(0, 4), (4, 8), (8, 16), (16, 32)]
+    assert sum(1 for key, *_ in asked if "delay=3" in key) == 1  # failed at once: never again
+    assert len(adaptive_report(score, [0.1], [], episodes=4).nominal.returns) == 4  # no precision: as asked
+    assert len(adaptive_report(score, [0.1], [], episodes=4, precision=0.01, max_episodes=12).nominal.returns) == 12  # the cap

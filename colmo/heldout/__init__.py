@@ -20,7 +20,7 @@ from colmo.environments.perturb import with_perturbation
 from colmo.evaluation import Evaluation, Evaluator, Executor
 from colmo.optimize.tune import CandidateEvaluator, calibrated
 from colmo.program import parametrize
-from colmo.robustness import RobustnessReport, perturbed, robustness_report
+from colmo.robustness import RobustnessReport, adaptive_report, perturbed
 from colmo.rollout import episode_seeds, heldout_seeds
 from colmo.specs import Spec, load_task_spec
 
@@ -53,13 +53,14 @@ def task_evaluator(task: TaskConfig, executor_cfg: ExecutorConfig, executor: Exe
 
 def robustness_of(
     executor: Executor, evaluator: Evaluator, skeleton: str, params: Sequence[float], seed: int, episodes: int,
-    magnitudes: Sequence[float], delays: Sequence[int],
+    magnitudes: Sequence[float], delays: Sequence[int], precision: Optional[float] = None, max_episodes: Optional[int] = None,
 ) -> RobustnessReport:
-    """The robustness report of a program on `episodes` held-out episodes of run seed `seed`, every
-    grid point scored by the referee on the task's nominal model plus that point's perturbation."""
-    heldout = heldout_evaluator(evaluator, seed, episodes)
+    """The robustness report of a program on `episodes` held-out episodes of run seed `seed`
+    (with `precision`, more until it holds, up to `max_episodes`: `colmo.robustness.adaptive_report`),
+    every grid point scored by the referee on the task's nominal model plus that point's perturbation."""
+    heldout = heldout_evaluator(evaluator, seed, max(episodes, max_episodes or episodes) if precision is not None else episodes)
 
-    def score(perturb: PerturbConfig) -> Evaluation:
-        return heldout_score(executor, perturbed(heldout, perturb), skeleton, tuple(params))
+    def score(perturb: PerturbConfig, start: int, stop: int) -> Evaluation:
+        return heldout_score(executor, perturbed(replace(heldout, seeds=heldout.seeds[start:stop]), perturb), skeleton, tuple(params))
 
-    return robustness_report(score, magnitudes, delays)
+    return adaptive_report(score, magnitudes, delays, episodes, precision, max_episodes)

@@ -5,7 +5,8 @@ one policy file on held-out episodes (`colmo.heldout`).
 
 Its last stdout line is a JSON object (`score`, `episodes`, `returns`, ...); a policy that
 fails exits 1. With `robustness=true` it also scores the policy under model mismatch
-(`colmo.robustness`) on `robustness_episodes` held-out episodes per grid point, prints the
+(`colmo.robustness`) on `robustness_episodes` held-out episodes per grid point (with
+`robustness_precision`, more until each point's interval holds it), prints the
 table, writes `robustness.{json,csv,png}` into the run directory and adds `robustness` (one
 entry per magnitude, nominal first) and `delay` to the JSON line.
 """
@@ -31,7 +32,7 @@ def main(cfg: EvaluateConfig) -> None:
         evaluation = heldout_score(session.executor, session.heldout(cfg.episodes), program.skeleton, program.values)
         report = robustness_of(
             session.executor, session.evaluator, program.skeleton, program.values, cfg.seed, cfg.robustness_episodes,
-            cfg.robustness_magnitudes, cfg.robustness_delays,
+            cfg.robustness_magnitudes, cfg.robustness_delays, cfg.robustness_precision, cfg.robustness_max_episodes,
         ) if cfg.robustness else None
     print(f"held-out score over {cfg.episodes} episodes: " + (f"{evaluation.score:.2f}" if not evaluation.failure else f"failed: {evaluation.failure}"))
     result = {
@@ -40,12 +41,14 @@ def main(cfg: EvaluateConfig) -> None:
         "seconds": round(evaluation.seconds, 3),
     }
     if report is not None:
-        print(f"robustness over {cfg.robustness_episodes} held-out episodes per point:\n{table(report)}")
+        episodes = len(report.nominal.returns)
+        print(f"robustness over {episodes} held-out episodes per point:\n{table(report)}")
         for failure in report.failures():
             print(f"  failed: {failure}")
         paths = save(report, run_directory(), f"{cfg.task.name}: {Path(cfg.policy_file).name}")
         print("wrote " + ", ".join(str(path) for path in paths))
-        result |= {"robustness_episodes": cfg.robustness_episodes, **report.as_json()}
+        # The report's own `episodes` are the grid's: here they are `robustness_episodes`, beside the held-out score's.
+        result |= {"robustness_episodes": episodes, **{key: value for key, value in report.as_json().items() if key != "episodes"}}
     print_result(result)
     if evaluation.failure:
         sys.exit(1)
