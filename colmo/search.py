@@ -95,6 +95,11 @@ class _Batch:
     def done(self) -> bool:
         return all(outcome.done() for outcome in self.outcomes)
 
+    @property
+    def entered(self) -> float:
+        """When it entered the pipeline: its generation's start (`time.perf_counter()`)."""
+        return self.started - self.generation_seconds
+
 
 class Search:
     """One search run into `run_dir` (or the run `cfg.resume` names). `executor` and `generator` are built from the config
@@ -302,9 +307,8 @@ class Search:
         if reset:
             log.info("reset islands %s", reset)
         report = self._report(batch)
-        began = lambda batch: batch.started - batch.generation_seconds  # noqa: E731 - when it entered the pipeline
-        pipeline = [(len(b.outcomes), began(b)) for b in self.in_flight]
-        self.budget.follow_samples(report, self.resumed_samples, self.cfg.search.max_samples, (len(records), began(batch)), pipeline)
+        pipeline = [(len(b.outcomes), b.entered) for b in self.in_flight]
+        self.budget.follow_samples(report, self.resumed_samples, self.cfg.search.max_samples, (len(records), batch.entered), pipeline)
         self.store.set_elapsed(self.elapsed())  # a run killed later resumes with its time up to here
         log.info(
             "batch %d: samples %d, programs evaluated %d, best %.2f, gen %.1f s, eval %.1f s, evals/s %.1f",
@@ -393,4 +397,3 @@ class Search:
             generation_seconds=batch.generation_seconds, evaluation_seconds=time.perf_counter() - batch.started,
             queue_depth=self.next_batch - batch.index - 1, **dataclasses.asdict(self.totals()),
         )
-

@@ -36,7 +36,7 @@ from collections import deque
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
-from colmo.config import SearchConfig
+from colmo.config import LanguageModelConfig, SearchConfig
 from colmo.evaluation import Executor
 from colmo.finish import FINISH_SHARE, SAFETY, FinishPlan, RefereeCost, plan_finish
 from colmo.optimize.tune import ProgramResult
@@ -205,7 +205,7 @@ class TimeBudget:
             what = "estimated once the first samples are in (the starter has no constants to tune: its time says nothing of a program's)"
         else:
             what = f"{duration(search)} ({cfg.search.max_samples} samples x {program_seconds:.1f} s of tuning, {in_parallel} at a time"
-            what += ", generation measured on the first samples)" if cfg.llm.name != "mutate" else ")"
+            what += ", generation measured on the first samples)" if isinstance(cfg.llm, LanguageModelConfig) else ")"
         log.info("estimated duration: search %s, finish %s; limit that binds: %s%s", what, duration(plan.seconds), limit, early)
 
     def follow_samples(
