@@ -6,7 +6,7 @@ regenerations included) and the programs evaluated of them, evaluations and eval
 control steps, the best training score, generator and evaluator busy (with how long the model's
 call in flight has run, from its first second), and the time left
 against the limit that binds (samples, seconds, or a target score), from the first seconds on
-(the starter's calibration estimates the search until samples settle). Log lines print above it
+(the search's own estimate: the starter's calibration until samples settle, then each batch's). Log lines print above it
 (rich's logging handler on the display's console), never into it. Without a terminal: the
 same numbers as one plain log line every `search.progress_every_s` seconds.
 """
@@ -50,7 +50,7 @@ class Snapshot:
     evaluator_busy: float
     max_seconds: float  # the run's time limit, counted from the search's start
     stop_at_score: Optional[float]
-    estimated_seconds: Optional[float] = None  # the search by max_samples, from the starter's calibration
+    estimated_seconds: Optional[float] = None  # when the search ends by max_samples (`TimeBudget.estimated_seconds`)
     resumed_samples: int = 0  # model calls an earlier process of a resumed run settled: not in this one's rate
     call_seconds: Optional[float] = None  # how long the generator's call in flight has run (None: no call in flight)
 
@@ -61,15 +61,16 @@ class Snapshot:
     def time_left(self) -> tuple[Optional[float], str]:
         """Seconds left against the limit that binds first, and its name: `stop_at_score` (0 s:
         the target is reached, the search is finishing), else whichever of `max_seconds` and
-        `max_samples` (at the rate samples have settled so far; before the first one settles, by
-        the estimate from the starter's calibration, while it has not run out) ends the run
-        sooner. None when nothing tells yet (no sample settled, no estimate left and no time limit)."""
+        `max_samples` ends the run sooner; `max_samples` by the search's own estimate (the
+        starter's, then re-made as each batch settles: the one its log lines say) while it has
+        not run out, else at the rate samples have settled so far. None when nothing tells yet
+        (no estimate left, no sample settled and no time limit)."""
         if self.stop_at_score is not None and self.best is not None and self.best >= self.stop_at_score:
             return 0.0, "stop_at_score"
         settled_here = self.samples - self.resumed_samples
         rate = settled_here / self.elapsed if self.elapsed and settled_here else 0.0
         by_samples = max(self.max_samples - self.samples, 0) / rate if rate else None
-        if by_samples is None and self.estimated_seconds is not None and self.estimated_seconds > self.elapsed:
+        if self.estimated_seconds is not None and self.estimated_seconds > self.elapsed:
             by_samples = self.estimated_seconds - self.elapsed  # an estimate that has run out tells nothing
         by_seconds = max(self.max_seconds - self.elapsed, 0.0) if self.max_seconds else None
         if by_seconds is not None and (by_samples is None or by_seconds <= by_samples):

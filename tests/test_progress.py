@@ -88,6 +88,13 @@ def test_before_the_first_sample_the_calibration_estimate_tells_the_time_left():
     assert state(samples=0, estimated_seconds=1000.0, max_seconds=600.0).time_left() == (pytest.approx(480.0), "max_seconds")
 
 
+def test_once_samples_settle_the_searchs_own_estimate_tells_the_time_left():
+    # 40 samples in 120 s would say 180 s more at that rate; the search's estimate (the one its
+    # log lines say, made as each batch settles) says 600 s from the start: 480 s more.
+    assert state(estimated_seconds=600.0).time_left() == (pytest.approx(480.0), "max_samples")
+    assert state(estimated_seconds=100.0).time_left() == (pytest.approx(180.0), "max_samples")  # run out: the rate
+
+
 def test_unknown_time_left_reads_as_a_question_mark():
     assert "? left (max_samples)" in state(samples=0).line()
 
