@@ -47,8 +47,9 @@ def main(cfg: EvaluateConfig) -> None:
             print(f"  failed: {failure}")
         paths = save(report, run_directory(), f"{cfg.task.name}: {Path(cfg.policy_file).name}")
         print("wrote " + ", ".join(str(path) for path in paths))
-        # The report's own `episodes` are the grid's: here they are `robustness_episodes`, beside the held-out score's.
-        result |= {"robustness_episodes": episodes, **{key: value for key, value in report.as_json().items() if key != "episodes"}}
+        grid = report.as_json()
+        grid["robustness_episodes"] = grid.pop("episodes")  # the grid's, beside the held-out score's `episodes`
+        result |= grid
     print_result(result)
     if evaluation.failure:
         sys.exit(1)
