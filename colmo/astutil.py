@@ -1,5 +1,5 @@
 """Small AST helpers shared by every module that reads or rewrites program code: parsing,
-docstrings, the names a statement or a node binds, renaming identifiers, replacing nodes, and
+finding a program's function, docstrings, the names a statement or a node binds, renaming identifiers, replacing nodes, and
 counting nodes.
 
 They work on `ast` trees only and never run code. Every parse in colmo goes through `parse`:
@@ -24,6 +24,11 @@ def parse(source: str, filename: str = "<unknown>", mode: str = "exec") -> ast.A
     """`ast.parse`, one thread at a time (see the module docstring)."""
     with _PARSING:
         return ast.parse(source, filename=filename, mode=mode)
+
+
+def function(tree: ast.Module, name: str) -> ast.FunctionDef | ast.AsyncFunctionDef | None:
+    """The module-level function `name` of `tree` (its first definition), or None."""
+    return next((s for s in tree.body if isinstance(s, (ast.FunctionDef, ast.AsyncFunctionDef)) and s.name == name), None)
 
 
 def is_docstring(statement: ast.AST) -> bool:

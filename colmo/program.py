@@ -107,7 +107,7 @@ def parametrize(code: str, function_name: str = "policy") -> ParametricProgram:
 
 def _parametrize(code: str, function_name: str) -> ParametricProgram:
     tree = _parse(code)
-    if not any(isinstance(s, (ast.FunctionDef, ast.AsyncFunctionDef)) and s.name == function_name for s in tree.body):
+    if astutil.function(tree, function_name) is None:
         raise ProgramError(f"no function named '{function_name}'")
     strip_docstrings(tree)
     _drop_unused_imports(tree)

@@ -124,7 +124,7 @@ def _blind_versions(codes: Sequence[str], function_name: str, new: str) -> str:
     another constant far more often than not (docs/llm-duplicates.md)."""
     blind = []
     for version, code in enumerate(codes):
-        policy = next(s for s in astutil.parse(code).body if isinstance(s, ast.FunctionDef) and s.name == function_name)
+        policy = astutil.function(astutil.parse(code), function_name)
         arguments = {a.arg for a in policy.args.posonlyargs + policy.args.args + policy.args.kwonlyargs}
         if not any(isinstance(n, ast.Name) and n.id in arguments for n in ast.walk(policy) if not isinstance(n, ast.arg)):
             blind.append(f"{function_name}_v{version}")

@@ -57,7 +57,10 @@ def value_nodes(root: ast.AST) -> list[ast.expr]:
 
 
 def policy_function(tree: ast.Module) -> ast.FunctionDef:
-    return next(node for node in tree.body if isinstance(node, ast.FunctionDef) and node.name == "policy")
+    function = astutil.function(tree, "policy")
+    if not isinstance(function, ast.FunctionDef):  # intake refuses such a program before it is stored
+        raise ValueError("the program defines no policy() to mutate")
+    return function
 
 
 def _replace(root: ast.AST, old: ast.AST, new: ast.AST) -> None:

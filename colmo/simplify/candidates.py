@@ -225,13 +225,8 @@ def deletion_candidates(code: str, function_name: str = "policy", stop: Callable
         except (SyntaxError, ValueError, RecursionError):
             continue
         dump, new_nodes = ast.dump(new_tree), node_count(new_tree)
-        if dump in seen or new_nodes >= nodes or not _defines(new_tree, function_name):
+        if dump in seen or new_nodes >= nodes or astutil.function(new_tree, function_name) is None:
             continue
         seen.add(dump)
         candidates.append(Candidate(description, new_code, new_nodes))
     return candidates
-
-
-def _defines(tree: ast.Module, function_name: str) -> bool:
-    return any(isinstance(s, FUNCTIONS) and s.name == function_name for s in tree.body)
-

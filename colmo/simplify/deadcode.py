@@ -367,18 +367,13 @@ def remove_dead_code(code: str, function_name: str = "policy", for_reading: bool
         if dump == before:
             break
         before = dump
-    function = _function(tree, function_name) if docstring is not None else None
+    function = astutil.function(tree, function_name) if docstring is not None else None
     if function is not None:
         function.body = [ast.Expr(ast.Constant(docstring)), *(s for s in function.body if not isinstance(s, ast.Pass))]
     return ast.unparse(ast.fix_missing_locations(tree))
 
 
-def _function(tree: ast.Module, name: str) -> Optional[ast.FunctionDef | ast.AsyncFunctionDef]:
-    """The module-level function `name` of `tree`, if it has one."""
-    return next((node for node in tree.body if isinstance(node, FUNCTIONS) and node.name == name), None)
-
-
 def _docstring_of(tree: ast.Module, function_name: str) -> Optional[str]:
-    function = _function(tree, function_name)
+    function = astutil.function(tree, function_name)
     return None if function is None else ast.get_docstring(function, clean=False)
 
