@@ -5,7 +5,8 @@
   skeleton code, parameters, allowed imports, and how to run it). Only plain data, so any
   executor (local processes, a Ray cluster) can carry it.
 - `Evaluation`: its outcome: per-episode returns or the failure reason, the control steps
-  simulated, and whether racing (`colmo.racing`) cut it short.
+  simulated, whether racing (`colmo.racing`) cut it short, and what was asked for besides (the
+  referee's recorded episode, the fast path's branch coverage).
 - `Executor`: anything that evaluates batches of requests, results in request order.
 - `Evaluator`: a task's evaluation settings, which make the request for a program.
 """
@@ -19,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Optional, Protocol, Sequence
 
 import numpy as np
 
+from colmo.coverage import Counts, added, checked_counts
 from colmo.errors import failure_reason
 from colmo.racing import Race
 
@@ -54,6 +56,7 @@ class EvalRequest:
     memory_mb: int = 4096  # address-space limit of the process running the policy
     race: Optional[Race] = None
     trace: bool = False  # referee mode: also record the episode (`colmo.trace.EpisodeTrace`)
+    coverage: bool = False  # fast path: also count what each branch did (`colmo.coverage`)
     label: str = ""  # what is evaluated, for the executor's messages ("sample 12"); workers ignore it
 
 
@@ -67,6 +70,7 @@ class Evaluation:
     raced_out: bool = False  # racing stopped it early: `returns` covers the first episodes only
     seconds: float = 0.0  # wall time of the evaluation, measured by the (trusted) sandbox worker
     trace: Optional[dict] = None  # the recorded episode, as `EpisodeTrace.to_dict()`, when asked for
+    coverage: Optional[tuple[Counts, ...]] = None  # per branch site (`colmo.coverage`), when asked for
 
     @property
     def score(self) -> float:
@@ -82,7 +86,11 @@ class Evaluation:
             return parts[0]
         returns = tuple(r for part in parts for r in part.returns)
         failure = next((part.failure for part in parts if part.failure), None)
-        return cls(returns, failure, sum(part.steps for part in parts), any(part.raced_out for part in parts), sum(part.seconds for part in parts))
+        counts = added([part.coverage for part in parts])
+        return cls(
+            returns, failure, sum(part.steps for part in parts), any(part.raced_out for part in parts), sum(part.seconds for part in parts),
+            coverage=None if counts is None else tuple(counts),
+        )
 
     def to_bytes(self) -> bytes:
         """The evaluation as JSON (what a sandbox process sends back)."""
@@ -91,6 +99,8 @@ class Evaluation:
         fields = {"returns": returns, "failure": failure, "steps": int(self.steps), "raced_out": bool(self.raced_out), "seconds": float(self.seconds)}
         if self.trace is not None:
             fields["trace"] = self.trace
+        if self.coverage is not None:
+            fields["coverage"] = [list(site) for site in self.coverage]
         return json.dumps(fields).encode()
 
     @classmethod
@@ -113,6 +123,7 @@ class Evaluation:
             raise ValueError("not a JSON object")
         returns, failure, steps = reply.get("returns"), reply.get("failure"), reply.get("steps")
         raced_out, seconds, trace = reply.get("raced_out"), reply.get("seconds"), reply.get("trace")
+        counts = None if reply.get("coverage") is None else tuple(checked_counts(reply["coverage"]))
         if (
             not isinstance(returns, list) or not all(type(r) is float and math.isfinite(r) for r in returns)
             or not isinstance(failure, (str, type(None))) or type(steps) is not int or steps < 0
@@ -125,6 +136,8 @@ class Evaluation:
         if request is not None:
             if trace is not None and not (request.trace and request.mode == REFEREE):
                 raise ValueError("a trace that was not asked for")  # only the worker records one
+            if counts is not None and not (request.coverage and request.mode == FAST):
+                raise ValueError("coverage that was not asked for")
             episodes = len(request.seeds)
             if len(returns) > episodes or (len(returns) < episodes and failure is None and not (raced_out and request.race is not None)):
                 raise ValueError(f"{len(returns)} returns for {episodes} episodes")
@@ -139,7 +152,7 @@ class Evaluation:
                     raise ValueError(f"a return beyond the {bound:.6g} that {episode_steps} steps earn")
         if failure and failure.startswith(EXECUTOR_REASONS):  # the program's text, not the executor's
             failure = f"program: {failure}"
-        return cls(tuple(returns), failure_reason(failure) if failure else None, steps, raced_out, seconds, trace)
+        return cls(tuple(returns), failure_reason(failure) if failure else None, steps, raced_out, seconds, trace, counts)
 
 
 class ExecutorClosed(RuntimeError):

@@ -3,7 +3,8 @@ simplified best policy, and a video and plot of it in action.
 
 A search selects programs by their training score, which therefore flatters the winner; the
 top `evaluation.top` structures get a held-out score from the referee on `evaluation.episodes`
-fresh episodes (`colmo.heldout`). The best one is then simplified (`colmo.simplify`) and
+fresh episodes (`colmo.heldout`). The best one's branches are counted over the training and
+held-out episodes (`colmo.coverage`: the comments of best_policy.py); it is then simplified (`colmo.simplify`) and
 rendered (`colmo.render`) on its first held-out episode, into the run directory; with
 `evaluation.robustness`, before that, scored over a grid of model-mismatch magnitudes
 (`colmo.robustness`: robustness.json/.csv/.png, a few numbers in the summary). Each step is
@@ -28,14 +29,16 @@ import logging
 import math
 import threading
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Optional, Sequence
 
+from colmo import coverage
 from colmo.config import SearchConfig
 from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor
 from colmo.heldout import heldout_evaluator, heldout_score, robustness_of
+from colmo.optimize.tune import CandidateEvaluator
 from colmo.record import EVALUATED, SampleRecord, Summary, Totals
 from colmo.robustness import grid_points, save
 from colmo.sandbox.referee import LOCKSTEP
@@ -161,6 +164,7 @@ class BestPrograms:
     media: dict = field(default_factory=dict)
     simplified: dict = field(default_factory=dict)
     robustness: dict = field(default_factory=dict)
+    coverage: dict = field(default_factory=dict)
 
     def summary(
         self, task: str, best: Optional["StoredProgram"], best_so_far: Sequence[tuple[int, float]], stop_reason: str, run_dir: Path, totals: Totals,
@@ -172,7 +176,7 @@ class BestPrograms:
         return Summary(
             task=task, best_score=best.score if best else None, best_heldout_score=best_heldout, best_key=best.key if best else None,
             best_code=best.code if best else None, best_so_far=tuple(best_so_far), stop_reason=stop_reason, run_dir=str(run_dir),
-            heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, robustness=self.robustness,
+            heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, robustness=self.robustness, coverage=self.coverage,
             startup_seconds=startup_seconds, search_seconds=search_seconds, by_generator=by_generator or {}, **asdict(totals),
         )
 
@@ -226,6 +230,10 @@ def finish(
     if not top:
         return best
     took["held-out"] = time.monotonic() - step
+    if cfg.evaluation.coverage and best.heldout:
+        step = time.monotonic()
+        best.coverage = _coverage(executor, evaluator, heldout, top[0], referee, until - plan.render_seconds)
+        took["coverage"] = time.monotonic() - step
     if cfg.evaluation.robustness:
         # Its time comes out of the simplification's slot, which takes what is left.
         if not best.heldout or not plan.robustness_seconds or _left(until) - plan.render_seconds < plan.robustness_seconds:
@@ -264,6 +272,27 @@ def _warm_up_render() -> threading.Thread:
     thread = threading.Thread(target=warm_up, name="colmo-render-warm-up", daemon=True)
     thread.start()
     return thread
+
+
+def _coverage(executor: Executor, evaluator: Evaluator, heldout: Evaluator, record: SampleRecord, referee: RefereeCost, until: float) -> dict:
+    """What each branch of the best program did over the training and held-out episodes, on the
+    fast path (`colmo.coverage`; it takes its seconds from the simplification's slot); the
+    summary's `coverage`, {} where the time or the program does not allow it."""
+    if not coverage.same_sites(record.code, record.skeleton):
+        log.warning("no branch coverage: the best program's code and skeleton differ in their branches")
+        return {}
+    both = replace(evaluator, seeds=evaluator.seeds + heldout.seeds)
+    workers = max(executor.n_workers, 1)
+    if _left(until) < referee.seconds(len(both.seeds), workers):
+        log.warning("no time left to count the best policy's branches (search.max_seconds)")
+        return {}
+    scale = max(math.ceil(len(both.seeds) / workers) / len(evaluator.seeds), 1.0)  # a chunk against the calibrated request
+    evaluation = CandidateEvaluator(executor, both, record.skeleton, workers).coverage(record.params, min(evaluator.timeout_s * scale, _left(until)))
+    if evaluation.failure or evaluation.coverage is None:
+        log.warning("no branch coverage of the best policy: %s", evaluation.failure or "no counts")
+        return {}
+    log.info("branch coverage of the best policy over %d episodes: %d site(s)", len(both.seeds), len(evaluation.coverage))
+    return coverage.summary(record.code, evaluation.coverage, len(both.seeds))
 
 
 def _robustness(cfg: SearchConfig, executor: Executor, evaluator: Evaluator, record: SampleRecord, run_dir: Path) -> dict:

@@ -29,6 +29,7 @@ from dataclasses import asdict, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Mapping, Optional
 
+from colmo.coverage import annotate
 from colmo.errors import ConfigError, RunError
 from colmo.record import TO_EVALUATE_AGAIN, Elapsed, SampleRecord, Summary
 
@@ -313,6 +314,15 @@ def write_outputs(summary: Summary, run_dir: Path) -> None:
                 f"# colmo best policy for {summary.task}: training score {summary.best_score:.2f}{heldout}"
                 f" after {summary.samples} samples\n"
             )
-            (run_dir / BEST_POLICY_FILE).write_text(header + summary.best_code)
+            (run_dir / BEST_POLICY_FILE).write_text(header + _with_coverage(summary.best_code, summary.coverage))
     except OSError as error:
         log.error("cannot write the run's outputs to %s: %s", run_dir, error)
+
+
+def _with_coverage(code: str, counted: dict[str, Any]) -> str:
+    """The best policy's code with what each branch did as comments (`colmo.coverage`), if counted."""
+    sites = counted.get("sites")
+    annotated = annotate(code, [tuple(site["counts"]) for site in sites]) if sites else None
+    if annotated is None:
+        return code
+    return f"# branches counted over {counted['episodes']} training and held-out episodes (fast path)\n" + annotated

@@ -45,6 +45,9 @@ def test_small_search_end_to_end(tmp_path):
     assert summary["best_so_far"][0][0] == 0 and summary["best_so_far"][-1][1] == summary["best_score"]
     best = (run_dir / "best_policy.py").read_text()
     assert "def policy(obs)" in best and f"{summary['best_score']:.2f}" in best
+    assert summary["coverage"]["episodes"] == 4  # its 2 training and 2 held-out episodes
+    for site in summary["coverage"]["sites"]:  # what each branch of the best policy did, as comments
+        assert f"# coverage: {site['says']}\n" in best
     assert [r[0] for r in rows] == list(range(-1, len(rows) - 1))  # the starter, then every sample once
     assert f"best score {summary['best_score']:.2f}" in result.stdout
 

@@ -65,6 +65,10 @@ class EvaluateConfig(PolicyFileConfig):
     """`colmo-evaluate`: score a policy file on held-out episodes."""
 
     episodes: int = option(100, "held-out episodes")
+    coverage: bool = option(
+        False, "also count what each branch of the policy did over the held-out episodes (fast path) and print the policy "
+        "with the counts as comments (colmo.coverage)",
+    )
     robustness: bool = option(False, "also score the policy over a grid of model-mismatch magnitudes (colmo.robustness)")
     robustness_episodes: int = option(
         20, "held-out episodes per robustness grid point, the same for every point: each point's score and its change from "

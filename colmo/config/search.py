@@ -47,6 +47,10 @@ class HeldoutConfig:
     robustness: bool = option(
         False, "at the end of a search, the best policy scored over a grid of model-mismatch magnitudes (robustness.json/.csv/.png; colmo.robustness)",
     )
+    coverage: bool = option(
+        True, "at the end of a search, what each branch of the best policy did over the training and held-out episodes "
+        "(comments in best_policy.py; colmo.coverage)",
+    )
     robustness_episodes: int = option(3, "held-out episodes per robustness grid point")
     robustness_magnitudes: list[float] = option(ROBUSTNESS_MAGNITUDES, "relative magnitudes of the robustness grid (0, nominal, is always scored)")
     robustness_delays: list[int] = option(ROBUSTNESS_DELAYS, "control delays (steps) of the robustness grid")

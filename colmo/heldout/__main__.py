@@ -8,7 +8,9 @@ fails exits 1. With `robustness=true` it also scores the policy under model mism
 (`colmo.robustness`) on `robustness_episodes` held-out episodes per grid point (with
 `robustness_precision`, more until each point's interval holds it), prints the
 table, writes `robustness.{json,csv,png}` into the run directory and adds `robustness` (one
-entry per magnitude, nominal first) and `delay` to the JSON line.
+entry per magnitude, nominal first) and `delay` to the JSON line. With `coverage=true` it
+counts what each branch of the policy did over the held-out episodes (`colmo.coverage`), prints
+the policy with those counts as comments and adds `coverage` to the JSON line.
 """
 
 from __future__ import annotations
@@ -16,10 +18,13 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from colmo import coverage
 from colmo.cli import hydra_app
 from colmo.config import EvaluateConfig
 from colmo.heldout import heldout_score, robustness_of
-from colmo.policy_tools import check_policy_file, policy_session, print_result, run_directory
+from colmo.optimize.tune import CandidateEvaluator
+from colmo.policy_tools import PolicySession, check_policy_file, policy_session, print_result, run_directory
+from colmo.program import instantiate
 from colmo.record import finite_or_none
 from colmo.robustness import save, table
 
@@ -34,6 +39,7 @@ def main(cfg: EvaluateConfig) -> None:
             session.executor, session.evaluator, program.skeleton, program.values, cfg.seed, cfg.robustness_episodes,
             cfg.robustness_magnitudes, cfg.robustness_delays, cfg.robustness_precision, cfg.robustness_max_episodes,
         ) if cfg.robustness else None
+        counted = branch_coverage(session, cfg.episodes) if cfg.coverage else None
     print(f"held-out score over {cfg.episodes} episodes: " + (f"{evaluation.score:.2f}" if not evaluation.failure else f"failed: {evaluation.failure}"))
     result = {
         "task": cfg.task.name, "policy_file": cfg.policy_file, "episodes": cfg.episodes, "seed": cfg.seed,
@@ -50,9 +56,25 @@ def main(cfg: EvaluateConfig) -> None:
         grid = report.as_json()
         grid["robustness_episodes"] = grid.pop("episodes")  # the grid's, beside the held-out score's `episodes`
         result |= grid
+    if counted is not None:
+        print(counted.pop("annotated"))
+        result["coverage"] = counted
     print_result(result)
     if evaluation.failure:
         sys.exit(1)
+
+
+def branch_coverage(session: PolicySession, episodes: int) -> dict:
+    """What each branch of the session's policy did over `episodes` held-out episodes
+    (`colmo.coverage.summary`), with `annotated`: the policy's code with the counts as comments;
+    `failure` instead where the fast path failed."""
+    program = session.program
+    heldout = session.heldout(episodes)
+    counted = CandidateEvaluator(session.executor, heldout, program.skeleton, session.executor.n_workers).coverage(program.values)
+    if counted.failure or counted.coverage is None:
+        return {"failure": counted.failure or "no counts", "annotated": "branch coverage: failed"}
+    code = instantiate(program.skeleton, program.values)
+    return coverage.summary(code, counted.coverage, len(heldout.seeds)) | {"annotated": coverage.annotate(code, counted.coverage)}
 
 
 if __name__ == "__main__":

@@ -74,6 +74,15 @@ class CandidateEvaluator:
         parts = self.executor.evaluate(requests)
         return [Evaluation.joined(parts[k : k + len(chunks)]) for k in range(0, len(parts), len(chunks))]
 
+    def coverage(self, params: Sequence[float], timeout_s: Optional[float] = None) -> Evaluation:
+        """The fast path's evaluation of one vector over all the seeds (split over
+        `episode_chunks` requests) with what each branch did (`Evaluation.coverage`)."""
+        requests = [
+            self.evaluator.request(self.skeleton, params, seeds=chunk, mode=FAST, timeout_s=timeout_s, coverage=True, label=self.label)
+            for chunk in self.chunks
+        ]
+        return Evaluation.joined(self.executor.evaluate(requests))
+
     def referee(self, params: Sequence[float], timeout_s: Optional[float] = None) -> Evaluation:
         """The referee's evaluation of one vector over all the seeds (split over
         `episode_chunks` requests), each request limited to `timeout_s` if given."""

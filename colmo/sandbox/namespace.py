@@ -29,6 +29,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from colmo.coverage import Probe, instrument
 from colmo.environments.base import PolicyFailure
 from colmo.errors import describe_exception
 from colmo.sandbox.check import NUMPY_SUBMODULES, ForbiddenProgram, attribute_allowed, check_tree, module_allowed, parse_program
@@ -220,10 +221,12 @@ def reset_numpy_state() -> None:
 class Program:
     """A checked, compiled program: `new_policy` runs its module code anew for each episode."""
 
-    def __init__(self, skeleton: str, allowed_imports: Sequence[str], params: Sequence[float]):
-        """Raises `ForbiddenProgram` for a refused program."""
+    def __init__(self, skeleton: str, allowed_imports: Sequence[str], params: Sequence[float], coverage: bool = False):
+        """Raises `ForbiddenProgram` for a refused program. With `coverage`, the checked tree
+        is instrumented (`colmo.coverage`) and `probe` counts what its branches do."""
         tree = parse_program(skeleton)
         check_tree(tree, allowed_imports)
+        self.probe = Probe(instrument(tree)) if coverage else None
         self.code = compile(tree, "<policy>", "exec")  # the tree checked, not a second parse
         self.allowed_imports = frozenset(allowed_imports)
         self.params = tuple(params)
@@ -236,6 +239,8 @@ class Program:
         reset_numpy_state()
         builtins_ = dict(_SAFE_BUILTINS, __import__=_guarded_import(self.allowed_imports, seed))
         namespace = {"__builtins__": builtins_, "__name__": "policy_module", "params": self.params}
+        if self.probe is not None:
+            namespace.update(self.probe.names())
         exec(self.code, namespace)
         policy = namespace.get("policy")
         if not callable(policy):
@@ -258,9 +263,11 @@ def load_policy(skeleton: str, allowed_imports: Sequence[str], params: Sequence[
     return Program(skeleton, allowed_imports, params).load()
 
 
-def compile_or_explain(skeleton: str, allowed_imports: Sequence[str], params: Sequence[float]) -> tuple[Program | None, str | None]:
+def compile_or_explain(
+    skeleton: str, allowed_imports: Sequence[str], params: Sequence[float], coverage: bool = False,
+) -> tuple[Program | None, str | None]:
     """`Program`, with a refusal turned into its stored reason: `(program, None)` or `(None, reason)`."""
     try:
-        return Program(skeleton, allowed_imports, params), None
+        return Program(skeleton, allowed_imports, params, coverage), None
     except ForbiddenProgram as error:
         return None, str(error)

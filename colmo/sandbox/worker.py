@@ -203,13 +203,14 @@ def _on_this_cpu() -> Iterator[None]:
 
 def _run_program(env: Environment, request: EvalRequest) -> Evaluation:
     """In the child: the program's fast-path evaluation, a fresh program instance per episode."""
-    program, refusal = compile_or_explain(request.skeleton, request.allowed_imports, request.params)
+    program, refusal = compile_or_explain(request.skeleton, request.allowed_imports, request.params, request.coverage)
     if program is None:
         return Evaluation(failure=refusal)
     try:
-        return evaluate_program(env, program.new_policy, request.seeds, request.steps, request.race)
+        evaluation = evaluate_program(env, program.new_policy, request.seeds, request.steps, request.race)
     except BaseException as error:  # SystemExit and friends raised by the policy
         return Evaluation(failure=describe_exception(error))
+    return evaluation if program.probe is None else dataclasses.replace(evaluation, coverage=tuple(map(tuple, program.probe.result())))
 
 
 def _fork_child(request: EvalRequest, keep: tuple[int, ...], run: Callable[[], Any]) -> int:
