@@ -52,6 +52,7 @@ class _Sites(ast.NodeTransformer):
     def __init__(self, rewrite: bool):
         self.rewrite = rewrite
         self.found: list[Site] = []
+        self.nodes: list[ast.AST] = []  # the node of each site: the If, While, IfExp or Call
         self.statement_line = 0
 
     def visit(self, node: ast.AST) -> Any:
@@ -63,12 +64,13 @@ class _Sites(ast.NodeTransformer):
         finally:
             self.statement_line = outer
 
-    def _site(self, kind: str, text: ast.AST) -> int:
+    def _site(self, kind: str, node: ast.AST, text: ast.AST) -> int:
         self.found.append(Site(kind, self.statement_line, _short(ast.unparse(text))))
+        self.nodes.append(node)
         return len(self.found) - 1
 
     def _condition(self, node: ast.If | ast.While | ast.IfExp, kind: str) -> ast.AST:
-        index = self._site(kind, node.test)
+        index = self._site(kind, node, node.test)
         self.generic_visit(node)
         if self.rewrite:
             node.test = ast.Call(ast.Name(BRANCH, ast.Load()), [ast.Constant(index), node.test], [])
@@ -88,7 +90,7 @@ class _Sites(ast.NodeTransformer):
         name = function.attr if isinstance(function, ast.Attribute) else function.id if isinstance(function, ast.Name) else None
         if name not in CALL_KINDS:
             return self.generic_visit(node)
-        index = self._site(name, node)
+        index = self._site(name, node, node)
         self.generic_visit(node)
         if not self.rewrite:
             return node
@@ -189,6 +191,49 @@ def added(parts: Sequence[Optional[Sequence[Counts]]]) -> Optional[list[Counts]]
     if not parts or any(p is None for p in parts) or len({len(p) for p in parts}) != 1:
         return None
     return [tuple(sum(c) for c in zip(*site)) for site in zip(*parts)]  # type: ignore[misc]
+
+
+class _Pruned(ast.NodeTransformer):
+    """Each branch that was decided the same way at every test replaced by the side that ran."""
+
+    def __init__(self, decided: dict[int, bool]):
+        self.decided = decided  # id of an If, While or IfExp -> its condition's one value
+
+    def _kept(self, node: ast.If | ast.While | ast.IfExp) -> Any:
+        self.generic_visit(node)
+        value = self.decided.get(id(node))
+        if value is None:
+            return node
+        return node.body if value else node.orelse
+
+    visit_If = visit_While = visit_IfExp = _kept
+
+
+def prune(code: str, counts: Sequence[Counts]) -> Optional[tuple[str, str]]:
+    """`code` without the branches its counts show were never taken (an `if` or conditional
+    expression whose condition was false at every test, or true at every test, keeps only the
+    side that ran; a `while` never entered goes), and what was removed, in words; None where
+    nothing was decided so, or the counts do not fit the code. What the episodes did not reach
+    stays: the simplifier removes what it can by trial."""
+    tree = astutil.parse(code)
+    visitor = _Sites(rewrite=False)
+    visitor.visit(tree)
+    if len(visitor.found) != len(counts):
+        return None
+    decided: dict[int, bool] = {}
+    removed = []
+    for site, node, (tests, true, _) in zip(visitor.found, visitor.nodes, counts):
+        if site.kind not in CONDITION_KINDS or not tests or 0 < true < tests or (site.kind == "while" and true):
+            continue
+        decided[id(node)] = bool(true)
+        removed.append(f"`{site.text}` ({'always' if true else 'never'} true in {tests:,} tests)")
+    if not decided:
+        return None
+    pruned = _Pruned(decided).visit(tree)
+    for node in ast.walk(pruned):  # a block left empty holds `pass`
+        if not isinstance(node, ast.Module) and getattr(node, "body", None) == []:
+            node.body = [ast.Pass()]
+    return ast.unparse(ast.fix_missing_locations(pruned)), "removed the branches never taken: " + ", ".join(removed)
 
 
 def _percent(part: int, whole: int) -> str:

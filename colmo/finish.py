@@ -250,7 +250,8 @@ def finish(
         else:
             # What is being scored when it stops still ends: about two such measurements.
             step = time.monotonic()
-            best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until - 2 * best_took, plan.reduced)
+            hint = coverage.prune(top[0].code, [tuple(site["counts"]) for site in best.coverage["sites"]]) if best.coverage else None
+            best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until - 2 * best_took, plan.reduced, hint)
             took["simplification"] = time.monotonic() - step
     if cfg.evaluation.render:
         step = time.monotonic()
@@ -345,10 +346,11 @@ def _render(cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: S
 
 def _simplify(
     cfg: SearchConfig, executor: Executor, evaluator: Evaluator, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float,
-    short: bool = False,
+    short: bool = False, hint: Optional[tuple[str, str]] = None,
 ) -> dict:
     """The best policy simplified into `simplified_policy.py`; its `to_json()` for the summary.
-    `short`: one candidate per worker at a time, so the deadline is checked often."""
+    `short`: one candidate per worker at a time, so the deadline is checked often; `hint`: the
+    program without the branches it never took, tried first."""
     from colmo.simplify import simplify_program
 
     options = cfg.simplify
@@ -356,7 +358,7 @@ def _simplify(
     try:
         result = simplify_program(
             executor, evaluator, heldout, record.code, cfg.gfo, options.tolerance, cfg.seed, options.max_rounds,
-            batch_size, stop=lambda: _left(until) <= 0, max_seconds=options.max_seconds,
+            batch_size, stop=lambda: _left(until) <= 0, max_seconds=options.max_seconds, hint=hint,
         )
     except RunError as error:  # the best program fails where the simplifier measures it
         log.warning("best policy not simplified: %s", error)

@@ -130,3 +130,41 @@ def test_colmo_evaluate_prints_the_policy_with_its_branch_counts(tmp_path):
     assert "    # coverage: if `cos_theta > 1.5`: true 0% of 3,000 tests (never true)\n    if cos_theta > 1.5:" in result.stdout
     counted = last_json_line(result.stdout)["coverage"]
     assert counted["episodes"] == 3 and [site["kind"] for site in counted["sites"]] == ["if", "conditional", "if", "where", "clip"]
+
+
+def test_pruning_keeps_the_side_of_each_branch_that_ran_and_nothing_undecided():
+    counts = [(2000, 0, 0), (2000, 1000, 0), (2000, 2000, 0), (100, 50, 0), (2000, 0, 2000)]
+    code, said = coverage.prune(DEAD_BRANCH, counts)
+    assert ast.dump(ast.parse(code)) == ast.dump(ast.parse(
+        "import numpy as np\n\ndef policy(obs):\n    cos_theta, sin_theta, omega = obs\n    push = 1.0 if omega > 0.0 else -1.0\n"
+        "    push = np.where(omega > 0.0, 0.5, -0.5)\n    return np.clip(push, 1.2, -0.8)\n"
+    ))
+    assert said == (
+        "removed the branches never taken: `cos_theta > 1.5` (never true in 2,000 tests), `sin_theta > 0.9` (always true in 2,000 tests)"
+    )
+    # Not reached at all, or taken both ways: nothing is known, nothing goes.
+    assert coverage.prune(DEAD_BRANCH, [(0, 0, 0), (2000, 1000, 0), (2000, 5, 0), (0, 0, 0), (2000, 0, 2000)]) is None
+    assert coverage.prune(DEAD_BRANCH, counts[:2]) is None  # another program's counts
+    only = "def policy(obs):\n    if obs[0] > 2.0:\n        return 1.0\n    return 0.0\n"
+    assert coverage.prune("def policy(obs):\n    while obs[0] > 2.0:\n        obs = obs - 1\n    return obs[0]\n", [(10, 0, 0)])[0] == (
+        "def policy(obs):\n    return obs[0]"
+    )
+    assert coverage.prune(only, [(10, 10, 0)])[0] == "def policy(obs):\n    return 1.0\n    return 0.0"
+
+
+def test_the_simplifier_takes_the_pruned_program_first_when_it_scores_the_same():
+    from colmo.simplify.greedy import Scores, Scoring, simplify
+
+    def score_batch(codes):  # the dead branch never counts: the pruned program scores the same
+        return [Scores(100.0, 90.0) for _ in codes]
+
+    pruned = coverage.prune(DEAD_BRANCH, [(2000, 0, 0), (2000, 1000, 0), (2000, 5, 0), (5, 3, 0), (2000, 0, 2000)])
+    result = simplify(DEAD_BRANCH, Scoring(lambda c: [s.train for s in score_batch(c)], lambda c: [s.heldout for s in score_batch(c)]), hint=pruned)
+    assert result.steps[0].description == "removed the branches never taken: `cos_theta > 1.5` (never true in 2,000 tests)"
+    assert "cos_theta > 1.5" not in result.code
+
+    def worse(codes):  # here the branch did matter (other episodes than the counted ones)
+        return [Scores(100.0 if "1.5" in c else 50.0, 90.0) for c in codes]
+
+    kept = simplify(DEAD_BRANCH, Scoring(lambda c: [s.train for s in worse(c)], lambda c: [s.heldout for s in worse(c)]), hint=pruned, max_rounds=0)
+    assert kept.steps == () and "cos_theta > 1.5" in kept.code
