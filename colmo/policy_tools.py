@@ -20,9 +20,10 @@ from pathlib import Path
 from typing import Any, Optional
 
 from colmo.config import PolicyFileConfig
-from colmo.evaluation import Evaluator, Executor
+from colmo.evaluation import Evaluation, Evaluator, Executor
 from colmo.heldout import heldout_evaluator, task_evaluator
 from colmo.intake import read_policy_file
+from colmo.optimize.tune import CandidateEvaluator
 from colmo.program import ParametricProgram
 from colmo.specs import Spec, load_task_spec
 
@@ -42,6 +43,12 @@ class PolicySession:
     def heldout(self, episodes: int) -> Evaluator:
         """The evaluator on `episodes` held-out episodes of the run seed (the same for every tool)."""
         return heldout_evaluator(self.evaluator, self.seed, episodes)
+
+    def branch_counts(self, evaluator: Evaluator) -> Evaluation:
+        """The fast path's evaluation of the policy on `evaluator`'s episodes, spread over the
+        workers, with what each of its branches did (`colmo.coverage`)."""
+        program = self.program
+        return CandidateEvaluator(self.executor, evaluator, program.skeleton, self.executor.n_workers).coverage(program.values)
 
 
 def check_policy_file(cfg: PolicyFileConfig) -> Spec:

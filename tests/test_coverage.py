@@ -168,3 +168,13 @@ def test_the_simplifier_takes_the_pruned_program_first_when_it_scores_the_same()
 
     kept = simplify(DEAD_BRANCH, Scoring(lambda c: [s.train for s in worse(c)], lambda c: [s.heldout for s in worse(c)]), hint=pruned, max_rounds=0)
     assert kept.steps == () and "cos_theta > 1.5" in kept.code
+
+
+def test_colmo_simplify_first_removes_the_branch_the_policy_never_took(tmp_path):
+    (tmp_path / "dead.py").write_text(DEAD_BRANCH)
+    result = run_colmo(
+        "colmo.simplify", "task=pendulum", "policy_file=dead.py", "task.episodes=3", "evaluation.episodes=3", "gfo=none", cwd=tmp_path,
+    )
+    assert result.returncode == 0, result.stderr
+    steps = [step["description"] for step in last_json_line(result.stdout)["steps"]]
+    assert steps[0] == "removed the branches never taken: `cos_theta > 1.5` (never true in 6,000 tests)"

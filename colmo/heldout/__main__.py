@@ -22,7 +22,6 @@ from colmo import coverage
 from colmo.cli import hydra_app
 from colmo.config import EvaluateConfig
 from colmo.heldout import heldout_score, robustness_of
-from colmo.optimize.tune import CandidateEvaluator
 from colmo.policy_tools import PolicySession, check_policy_file, policy_session, print_result, run_directory
 from colmo.program import instantiate
 from colmo.record import finite_or_none
@@ -68,14 +67,12 @@ def branch_coverage(session: PolicySession, episodes: int) -> dict:
     """What each branch of the session's policy did over `episodes` held-out episodes
     (`colmo.coverage.summary`), with `annotated`: the policy's code with the counts as comments;
     `failure` instead where the fast path failed."""
-    program = session.program
     heldout = session.heldout(episodes)
-    counted = CandidateEvaluator(session.executor, heldout, program.skeleton, session.executor.n_workers).coverage(program.values)
+    counted = session.branch_counts(heldout)
     if counted.failure or counted.coverage is None:
         return {"failure": counted.failure or "no counts", "annotated": "branch coverage: failed"}
-    code = instantiate(program.skeleton, program.values)
+    code = instantiate(session.program.skeleton, session.program.values)
     return coverage.summary(code, counted.coverage, len(heldout.seeds)) | {"annotated": coverage.annotate(code, counted.coverage)}
-
 
 if __name__ == "__main__":
     main()

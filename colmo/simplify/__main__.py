@@ -5,19 +5,25 @@ before and after (AST nodes, lines, parameters); the last line of stdout is one 
 (`score_initial`, `score`, `heldout_score_initial`, `heldout_score`, `size_initial`, `size`
 (AST nodes), `lines`, `n_params`, `code`, `seconds`, `steps`, ...). Also writes
 `simplified_policy.py` (its scores in a header) and `result.json` to the Hydra run directory,
-and says where. `simplify.tolerance` is the share of the training score a deletion may cost;
+and says where. Before the first deletion it counts what each branch of the policy did over the
+training and held-out episodes (`colmo.coverage`) and tries the policy without the branches it
+never took. `simplify.tolerance` is the share of the training score a deletion may cost;
 `gfo=none` skips the final re-tuning.
 """
 
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 from pathlib import Path
+from typing import Optional
 
+from colmo import coverage
 from colmo.cli import hydra_app
 from colmo.config import SimplifyAppConfig
+from colmo.evaluation import Evaluator
 from colmo.extract import extract_policy
-from colmo.policy_tools import check_policy_file, policy_session, print_result, write_result
+from colmo.policy_tools import PolicySession, check_policy_file, policy_session, print_result, write_result
 from colmo.simplify.greedy import SimplifyResult
 from colmo.simplify.sandboxed import simplify_program
 
@@ -44,6 +50,17 @@ def _report(result: SimplifyResult, episodes: int, heldout_episodes: int) -> str
     return "\n".join(lines)
 
 
+def _untaken_branches(session: PolicySession, code: str, episodes: Evaluator) -> Optional[tuple[str, str]]:
+    """`code` without the branches it never took over `episodes` (`colmo.coverage.prune`), for
+    the simplifier to try first; None where it took every branch both ways or was not counted."""
+    if not coverage.same_sites(code, session.program.skeleton):
+        return None
+    counted = session.branch_counts(episodes)
+    if counted.failure or counted.coverage is None:
+        return None
+    return coverage.prune(code, counted.coverage)
+
+
 @hydra_app("simplify", check=check_policy_file)
 def main(cfg: SimplifyAppConfig) -> None:
     """Delete dead code and each part that costs at most simplify.tolerance of the score, then re-tune."""
@@ -54,9 +71,10 @@ def main(cfg: SimplifyAppConfig) -> None:
             "%s: simplifying with tolerance %g on %d training and %d held-out episodes, gfo=%s",
             cfg.policy_file, cfg.simplify.tolerance, len(evaluator.seeds), len(heldout.seeds), cfg.gfo.method,
         )
+        hint = _untaken_branches(session, code, replace(evaluator, seeds=evaluator.seeds + heldout.seeds))
         result = simplify_program(
             session.executor, evaluator, heldout, code, cfg.gfo, cfg.simplify.tolerance, cfg.seed, cfg.simplify.max_rounds, cfg.simplify.batch_size,
-            max_seconds=cfg.simplify.max_seconds,
+            max_seconds=cfg.simplify.max_seconds, hint=hint,
         )
 
     print(_report(result, len(evaluator.seeds), len(heldout.seeds)))
