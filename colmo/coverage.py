@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import ast
 from dataclasses import dataclass
-from typing import Any, Callable, Optional, Sequence
+from typing import Any, Callable, NamedTuple, Optional, Sequence
 
 import numpy as np
 
@@ -209,7 +209,15 @@ class _Pruned(ast.NodeTransformer):
     visit_If = visit_While = visit_IfExp = _kept
 
 
-def prune(code: str, counts: Sequence[Counts]) -> Optional[tuple[str, str]]:
+class Pruned(NamedTuple):
+    """A program without the branches it never took: its code, what went in words, how many."""
+
+    code: str
+    description: str
+    branches: int
+
+
+def prune(code: str, counts: Sequence[Counts]) -> Optional[Pruned]:
     """`code` without the branches its counts show were never taken (an `if` or conditional
     expression whose condition was false at every test, or true at every test, keeps only the
     side that ran; a `while` never entered goes), and what was removed, in words; None where
@@ -233,7 +241,7 @@ def prune(code: str, counts: Sequence[Counts]) -> Optional[tuple[str, str]]:
     for node in ast.walk(pruned):  # a block left empty holds `pass`
         if not isinstance(node, ast.Module) and getattr(node, "body", None) == []:
             node.body = [ast.Pass()]
-    return ast.unparse(ast.fix_missing_locations(pruned)), "removed the branches never taken: " + ", ".join(removed)
+    return Pruned(ast.unparse(ast.fix_missing_locations(pruned)), "removed the branches never taken: " + ", ".join(removed), len(removed))
 
 
 def _percent(part: int, whole: int) -> str:

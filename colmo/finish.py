@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Optional, Sequence
 
 from colmo import coverage
 from colmo.config import SearchConfig
+from colmo.coverage import Pruned
 from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor
 from colmo.heldout import heldout_evaluator, heldout_score, robustness_of
@@ -346,7 +347,7 @@ def _render(cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: S
 
 def _simplify(
     cfg: SearchConfig, executor: Executor, evaluator: Evaluator, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float,
-    short: bool = False, hint: Optional[tuple[str, str]] = None,
+    short: bool = False, hint: Optional[Pruned] = None,
 ) -> dict:
     """The best policy simplified into `simplified_policy.py`; its `to_json()` for the summary.
     `short`: one candidate per worker at a time, so the deadline is checked often; `hint`: the

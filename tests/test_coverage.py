@@ -134,7 +134,8 @@ def test_colmo_evaluate_prints_the_policy_with_its_branch_counts(tmp_path):
 
 def test_pruning_keeps_the_side_of_each_branch_that_ran_and_nothing_undecided():
     counts = [(2000, 0, 0), (2000, 1000, 0), (2000, 2000, 0), (100, 50, 0), (2000, 0, 2000)]
-    code, said = coverage.prune(DEAD_BRANCH, counts)
+    code, said, branches = coverage.prune(DEAD_BRANCH, counts)
+    assert branches == 2
     assert ast.dump(ast.parse(code)) == ast.dump(ast.parse(
         "import numpy as np\n\ndef policy(obs):\n    cos_theta, sin_theta, omega = obs\n    push = 1.0 if omega > 0.0 else -1.0\n"
         "    push = np.where(omega > 0.0, 0.5, -0.5)\n    return np.clip(push, 1.2, -0.8)\n"
@@ -176,5 +177,6 @@ def test_colmo_simplify_first_removes_the_branch_the_policy_never_took(tmp_path)
         "colmo.simplify", "task=pendulum", "policy_file=dead.py", "task.episodes=3", "evaluation.episodes=3", "gfo=none", cwd=tmp_path,
     )
     assert result.returncode == 0, result.stderr
-    steps = [step["description"] for step in last_json_line(result.stdout)["steps"]]
-    assert steps[0] == "removed the branches never taken: `cos_theta > 1.5` (never true in 6,000 tests)"
+    simplified = last_json_line(result.stdout)
+    assert [step["description"] for step in simplified["steps"]][0] == "removed the branches never taken: `cos_theta > 1.5` (never true in 6,000 tests)"
+    assert simplified["branches_never_taken"] == 1

@@ -21,6 +21,7 @@ from typing import Optional
 from colmo import coverage
 from colmo.cli import hydra_app
 from colmo.config import SimplifyAppConfig
+from colmo.coverage import Pruned
 from colmo.evaluation import Evaluator
 from colmo.extract import extract_policy
 from colmo.policy_tools import PolicySession, check_policy_file, policy_session, print_result, write_result
@@ -50,7 +51,7 @@ def _report(result: SimplifyResult, episodes: int, heldout_episodes: int) -> str
     return "\n".join(lines)
 
 
-def _untaken_branches(session: PolicySession, code: str, episodes: Evaluator) -> Optional[tuple[str, str]]:
+def _untaken_branches(session: PolicySession, code: str, episodes: Evaluator) -> Optional[Pruned]:
     """`code` without the branches it never took over `episodes` (`colmo.coverage.prune`), for
     the simplifier to try first; None where it took every branch both ways or was not counted."""
     if not coverage.same_sites(code, session.program.skeleton):
@@ -81,6 +82,7 @@ def main(cfg: SimplifyAppConfig) -> None:
     summary = result.to_json() | {
         "task": cfg.task.name, "policy_file": cfg.policy_file, "tolerance": cfg.simplify.tolerance, "gfo": cfg.gfo.method,
         "episodes": len(evaluator.seeds), "heldout_episodes": len(heldout.seeds), "seed": cfg.seed,
+        "branches_never_taken": hint.branches if hint else 0,
     }
     header = (
         f"# simplified by colmo-simplify (tolerance {cfg.simplify.tolerance:g}, gfo={cfg.gfo.method}) from {cfg.policy_file}:\n"

@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Sequence
 
 from colmo import astutil
+from colmo.coverage import Pruned
 from colmo.program import DISPLAY_DIGITS, ProgramSize, instantiate, measure, parametrize, round_significant
 from colmo.record import finite_or_none
 from colmo.simplify.candidates import Candidate, deletion_candidates
@@ -200,12 +201,12 @@ def simplify(
     batch_size: Optional[int] = None,
     function_name: str = "policy",
     stop: Callable[[], bool] = lambda: False,
-    hint: Optional[tuple[str, str]] = None,
+    hint: Optional[Pruned] = None,
 ) -> SimplifyResult:
     """Simplify `code` (module docstring) and report what it cost. `stop()` is asked before each
     round, between a round's batches and before re-tuning; once it says so, the best program so far is the result.
-    `hint`: a smaller version of the program and what it removed, known before any trial (the
-    branches the program never took: `colmo.coverage.prune`), tried first under the same rule.
+    `hint`: the program without the branches it never took (`colmo.coverage.prune`), known
+    before any trial, tried first under the same rule.
     Raises `ProgramFails` if the original program fails on the training episodes."""
     if not 0 <= tolerance < 1:
         raise ValueError(f"tolerance must be in [0, 1), got {tolerance}")
@@ -225,11 +226,11 @@ def simplify(
         current, scores = cleaned, scores_cleaned
         steps.append(Step("removed dead code and folded constants", cleaned, scores, measure(cleaned)))
     if hint is not None and not stop():
-        hinted = remove_dead_code(hint[0], function_name)
+        hinted = remove_dead_code(hint.code, function_name)
         hinted_scores = scorer.both([hinted])[0]
         if rule.accepts(hinted_scores) and measure(hinted).nodes < measure(current).nodes:
             current, scores = hinted, hinted_scores
-            steps.append(Step(hint[1], current, scores, measure(current)))
+            steps.append(Step(hint.description, current, scores, measure(current)))
 
     rounds = 0
     while rounds < max_rounds and not stop():

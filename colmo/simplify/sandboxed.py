@@ -25,6 +25,7 @@ import math
 import time
 from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
+from colmo.coverage import Pruned
 from colmo.errors import RunError
 from colmo.evaluation import REFEREE, Evaluation, Evaluator, Executor
 from colmo.intake import Unusable, read_program
@@ -101,7 +102,7 @@ def simplify_program(
     batch_size: Optional[int] = None,
     stop: Callable[[], bool] = lambda: False,
     max_seconds: Optional[float] = None,
-    hint: Optional[tuple[str, str]] = None,
+    hint: Optional[Pruned] = None,
 ) -> SimplifyResult:
     """Simplify a policy program of a task: dead code out, constants folded, deletions that cost
     at most `tolerance` of the training score (and do not widen the held-out gap by more), and
