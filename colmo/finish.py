@@ -39,6 +39,7 @@ from colmo.coverage import Pruned
 from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor
 from colmo.heldout import heldout_evaluator, heldout_score, robustness_of
+from colmo.names import misnamed
 from colmo.optimize.tune import CandidateEvaluator
 from colmo.record import EVALUATED, SampleRecord, Summary, Totals
 from colmo.robustness import grid_points, save
@@ -166,6 +167,7 @@ class BestPrograms:
     simplified: dict = field(default_factory=dict)
     robustness: dict = field(default_factory=dict)
     coverage: dict = field(default_factory=dict)
+    misnamed: list[str] = field(default_factory=list)
 
     def summary(
         self, task: str, best: Optional["StoredProgram"], best_so_far: Sequence[tuple[int, float]], stop_reason: str, run_dir: Path, totals: Totals,
@@ -178,7 +180,8 @@ class BestPrograms:
             task=task, best_score=best.score if best else None, best_heldout_score=best_heldout, best_key=best.key if best else None,
             best_code=best.code if best else None, best_so_far=tuple(best_so_far), stop_reason=stop_reason, run_dir=str(run_dir),
             heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, robustness=self.robustness, coverage=self.coverage,
-            startup_seconds=startup_seconds, search_seconds=search_seconds, by_generator=by_generator or {}, **asdict(totals),
+            misnamed=tuple(self.misnamed), startup_seconds=startup_seconds, search_seconds=search_seconds, by_generator=by_generator or {},
+            **asdict(totals),
         )
 
 
@@ -195,10 +198,11 @@ def _left(until: float) -> float:
 
 def finish(
     cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator: Evaluator, run_dir: Path,
-    until: float = math.inf, referee: RefereeCost = RefereeCost(0.0, 0.0),
+    until: float = math.inf, referee: RefereeCost = RefereeCost(0.0, 0.0), observation_names: Sequence[str] = (),
 ) -> BestPrograms:
     """Held-out scores of the top programs (stored with them), then the best one simplified and
-    rendered, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`."""
+    rendered, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`;
+    the best one's variables named against the spec's `observation_names` (`colmo.names`)."""
     best = BestPrograms()
     warming = _warm_up_render() if cfg.evaluation.render else None
     started, took = time.monotonic(), {}  # seconds each step took, for the closing log line
@@ -230,6 +234,7 @@ def finish(
         log.info("sample %d: training score %.2f, held-out %s over %d episodes", record.sample, record.score, _shown(score), len(heldout.seeds))
     if not top:
         return best
+    best.misnamed = misnamed(top[0].code, observation_names)
     took["held-out"] = time.monotonic() - step
     if cfg.evaluation.coverage and best.heldout:
         step = time.monotonic()

@@ -64,7 +64,7 @@ class Sampler:
     def prompt(self, database: ProgramDatabase, retry: int = 0) -> Prompt:
         """A prompt from a new selection of `database`; `retry`: the regeneration of an answer it is for."""
         spec = self.spec
-        prompt = build_prompt(spec.description, database.select(), constants_tuned=tunes_constants(self.cfg.gfo), allowed_imports=spec.allowed_imports)
+        prompt = build_prompt(spec.prompt_text, database.select(), constants_tuned=tunes_constants(self.cfg.gfo), allowed_imports=spec.allowed_imports)
         return dataclasses.replace(prompt, retry=retry)
 
     def answers(

@@ -5,7 +5,10 @@ A spec file (see `colmo/specs/pendulum.py`) holds
 - `make_environment(**options) -> colmo.environments.base.Environment`: the simulator, with the task YAML's
   `env:` mapping as keyword arguments;
 - `policy(obs)`: the starter program the search evolves;
-- optionally `ALLOWED_IMPORTS`: modules a policy may import besides numpy and math.
+- optionally `ALLOWED_IMPORTS`: modules a policy may import besides numpy and math;
+- optionally `OBSERVATION_NAMES`: a name per observation entry, which the prompt shows as the
+  line of code that unpacks `obs` and against which a policy's variable names are checked
+  (`colmo.names`).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
 from colmo import astutil
+from colmo.names import observation_in_code
 
 if TYPE_CHECKING:  # the simulator (MuJoCo) is imported when a spec is loaded, not with the prompt's imports
     from colmo.environments.base import Environment
@@ -39,6 +43,14 @@ class Spec:
     starter_code: str
     make_environment: Callable[..., Environment]
     allowed_imports: tuple[str, ...]
+    observation_names: tuple[str, ...] = ()  # `OBSERVATION_NAMES`: a name per observation entry, if the spec gives them
+
+    @property
+    def prompt_text(self) -> str:
+        """The task as a prompt states it: the description, and the observation's names as code."""
+        if not self.observation_names:
+            return self.description
+        return f"{self.description}\n\nThe observation, in code: `{observation_in_code(self.observation_names)}`."
 
 
 def resolve_spec_path(name_or_path: str) -> Path:
@@ -89,8 +101,11 @@ def load_spec(name_or_path: str) -> Spec:
     if not callable(make_environment):
         raise SpecError(f"{path}: the spec file needs a `make_environment(**options)` function")
     allowed = tuple(dict.fromkeys(DEFAULT_IMPORTS + tuple(getattr(module, "ALLOWED_IMPORTS", ()))))
+    names = getattr(module, "OBSERVATION_NAMES", ())
+    if not isinstance(names, (tuple, list)) or not all(isinstance(n, str) and n.isidentifier() for n in names):
+        raise SpecError(f"{path}: OBSERVATION_NAMES must be a tuple of Python identifiers, one per observation entry")
     # Any MuJoCo spec takes `task.perturb` through the reserved option, unknown to its make_environment.
-    return Spec(path.stem, path, description, starter, perturbable(make_environment), allowed)
+    return Spec(path.stem, path, description, starter, perturbable(make_environment), allowed, tuple(names))
 
 
 def load_task_spec(name_or_path: str) -> Spec:

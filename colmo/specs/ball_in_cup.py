@@ -23,6 +23,17 @@ import numpy as np
 
 from colmo.environments.ball_in_cup import BallInCup
 
+OBSERVATION_NAMES = (
+    "cup_x",
+    "cup_z",
+    "ball_x",
+    "ball_z",
+    "cup_x_velocity",
+    "cup_z_velocity",
+    "ball_x_velocity",
+    "ball_z_velocity",
+)
+
 
 def make_environment(**options) -> BallInCup:
     return BallInCup(**options)

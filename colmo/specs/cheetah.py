@@ -24,6 +24,26 @@ import numpy as np
 
 from colmo.environments.cheetah import Cheetah
 
+OBSERVATION_NAMES = (
+    "torso_height",
+    "torso_pitch",
+    "back_thigh_angle",
+    "back_shin_angle",
+    "back_foot_angle",
+    "front_thigh_angle",
+    "front_shin_angle",
+    "front_foot_angle",
+    "forward_velocity",
+    "vertical_velocity",
+    "pitch_velocity",
+    "back_thigh_velocity",
+    "back_shin_velocity",
+    "back_foot_velocity",
+    "front_thigh_velocity",
+    "front_shin_velocity",
+    "front_foot_velocity",
+)
+
 
 def make_environment(**options) -> Cheetah:
     return Cheetah(**options)

@@ -13,6 +13,12 @@ clipped). Control period 20 ms, episodes of 1000 steps. Reward: 1 for every step
 
 from colmo.environments.pendulum import PendulumSwingup
 
+OBSERVATION_NAMES = (
+    "cos_theta",
+    "sin_theta",
+    "angular_velocity",
+)
+
 
 def make_environment(**options) -> PendulumSwingup:
     return PendulumSwingup(**options)
