@@ -33,7 +33,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Optional, Sequence
 
-from colmo import coverage
+from colmo import coverage, readability
 from colmo.config import SearchConfig
 from colmo.coverage import Pruned
 from colmo.errors import RunError
@@ -168,6 +168,7 @@ class BestPrograms:
     robustness: dict = field(default_factory=dict)
     coverage: dict = field(default_factory=dict)
     misnamed: list[str] = field(default_factory=list)
+    readability: dict = field(default_factory=dict)
 
     def summary(
         self, task: str, best: Optional["StoredProgram"], best_so_far: Sequence[tuple[int, float]], stop_reason: str, run_dir: Path, totals: Totals,
@@ -180,7 +181,8 @@ class BestPrograms:
             task=task, best_score=best.score if best else None, best_heldout_score=best_heldout, best_key=best.key if best else None,
             best_code=best.code if best else None, best_so_far=tuple(best_so_far), stop_reason=stop_reason, run_dir=str(run_dir),
             heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, robustness=self.robustness, coverage=self.coverage,
-            misnamed=tuple(self.misnamed), startup_seconds=startup_seconds, search_seconds=search_seconds, by_generator=by_generator or {},
+            misnamed=tuple(self.misnamed), readability=self.readability, startup_seconds=startup_seconds, search_seconds=search_seconds,
+            by_generator=by_generator or {},
             **asdict(totals),
         )
 
@@ -259,6 +261,8 @@ def finish(
             hint = coverage.prune(top[0].code, [tuple(site["counts"]) for site in best.coverage["sites"]]) if best.coverage else None
             best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until - 2 * best_took, plan.reduced, hint)
             took["simplification"] = time.monotonic() - step
+    best.readability = readability.report(top[0].code, best.coverage, best.simplified, best.misnamed)
+    log.info("best policy's readability: %s", readability.describe(best.readability))
     if cfg.evaluation.render:
         step = time.monotonic()
         warming.join(max(_left(until), 0.0))

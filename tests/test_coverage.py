@@ -180,3 +180,21 @@ def test_colmo_simplify_first_removes_the_branch_the_policy_never_took(tmp_path)
     simplified = last_json_line(result.stdout)
     assert [step["description"] for step in simplified["steps"]][0] == "removed the branches never taken: `cos_theta > 1.5` (never true in 6,000 tests)"
     assert simplified["branches_never_taken"] == 1
+
+
+def test_the_readability_report_counts_what_the_finish_measured():
+    from colmo.readability import describe, report
+
+    counted = coverage.summary(DEAD_BRANCH, [(2000, 0, 0), (2000, 1000, 0), (2000, 2000, 0), (100, 50, 0), (2000, 900, 1100)], 2)
+    simplified = {"score": 48.6, "lines": 2, "n_params": 1, "steps": [{"description": "removed the branches never taken: ..."}]}
+    readable = report(DEAD_BRANCH, counted, simplified, ["`theta` holds obs[0], which the task calls cos_theta"])
+    assert {key: readable[key] for key in ("lines", "branches", "branches_never_taken", "clips_at_a_limit", "misleading_names")} == {
+        "lines": 9, "branches": 3, "branches_never_taken": 2, "clips_at_a_limit": 1, "misleading_names": 1,
+    }
+    assert (readable["simplified_lines"], readable["simplified_parameters"], readable["removed"]) == (2, 1, ["removed the branches never taken: ..."])
+    assert describe(readable) == (
+        "9 lines, 11 parameters; 2 of 3 branches decided the same way at every test; 1 clip(s) returning a limit for every value; "
+        "1 misleading name(s); simplified: 2 lines, 1 parameters"
+    )
+    nothing = report(DEAD_BRANCH, {}, {"failure": "the policy fails"}, [])
+    assert nothing["branches"] is None and nothing["simplified_lines"] is None and nothing["removed"] == []

@@ -173,6 +173,10 @@ def test_sweep_jobs_log_params_tags_metric_columns_programs_and_artifacts(sweep,
         names = {f.path for folder in (None, "hydra", "best_policy") for f in client.list_artifacts(run.info.run_id, folder)}
         assert {"best_policy.py", "summary.json", "best_so_far.png", "programs.json", "programs.html", "hydra/config.yaml", "hydra/overrides.yaml"} <= names
         assert (run_dir / "simplified_policy.py").is_file() and "simplified_policy.py" in names
+        # the best policy's readability report, as the summary has it
+        readable = summary["readability"]
+        assert metrics["readability_lines"] == readable["lines"] >= 1 and metrics["readability_misleading_names"] == readable["misleading_names"]
+        assert metrics["readability_simplified_lines"] == readable["simplified_lines"]
         media = summary["media"]
         assert {"plot", "video"} <= set(media), media  # the best policy on a held-out episode, made by every job
         assert {f"best_policy/{Path(media['plot']).name}", f"best_policy/{Path(media['video']).name}"} <= names

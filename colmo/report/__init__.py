@@ -27,7 +27,8 @@ Seeds are aggregated as mean ± sample std.
   of means with its bootstrap interval, "no significant difference" when it holds 0; the cost:
   wall and worker seconds, model calls, evaluations: `colmo.comparison`), one line per
   run, where each run's samples and time went (valid programs, duplicates, tokens/s,
-  generator and evaluator busy), the runs left out and why, and each variant's best policy;
+  generator and evaluator busy), each run's best policy's readability (`colmo.readability`), the
+  runs left out and why, and each variant's best policy;
 - `best_so_far.png`: one panel per task, x = model calls (programs sampled), candidate
   evaluations or seconds of search (the first of `axis`, a comma-separated list of
   samples, evaluations, seconds; default `samples,seconds`); one colour per variant, named in
@@ -56,6 +57,7 @@ from colmo.report.tables import (
     generation_table,
     left_out_lines,
     mean_std,
+    readability_table,
     runs_table,
     table_one,
     yield_table,
@@ -153,6 +155,14 @@ def write_report(
         "## Generation and evaluation",
         "",
         *generation_table(tasks),
+        "",
+        "## Readability of each run's best policy",
+        "",
+        "Lines and parameters as the search found it and as the simplifier left it; its branches decided the same way at every "
+        "test over the training and held-out episodes (one side never taken); clips that returned a limit for every value; "
+        "variables whose names contradict the task's (`colmo.readability`).",
+        "",
+        *readability_table(tasks),
         "",
         "## Runs left out",
         "",

@@ -5,6 +5,7 @@ runs left out, and each variant's best policy."""
 
 from __future__ import annotations
 
+import functools
 import tempfile
 from pathlib import Path
 from typing import Callable, Optional, Sequence
@@ -171,6 +172,32 @@ def generation_table(tasks: dict[str, list[Variant]]) -> list[str]:
                     f"{percent(metrics.get('generator_busy'))} | {percent(metrics.get('evaluator_busy'))} |"
                 )
     return lines
+
+
+def readability_table(tasks: dict[str, list[Variant]]) -> list[str]:
+    """Per run, its best policy's readability report (`colmo.readability`, the
+    `readability_*` metrics): lines and parameters as found and as simplified, branches decided
+    the same way at every test, clips that return a limit for every value, misleading names."""
+    lines = [
+        "| Run | Variant | Lines | Parameters | Simplified lines | Simplified parameters | Branches never taken | Clips at a limit | Misleading names |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for variants in tasks.values():
+        for variant in variants:
+            for run in variant.runs:
+                metrics = run.run.data.metrics
+                cell = functools.partial(_readability_cell, metrics)
+                never = cell("branches_never_taken") + ("" if metrics.get("readability_branches") is None else f" of {cell('branches')}")
+                lines.append(
+                    f"| {run.run.info.run_name} | {variant.name} | {cell('lines')} | {cell('parameters')} | {cell('simplified_lines')} | "
+                    f"{cell('simplified_parameters')} | {never} | {cell('clips_at_a_limit')} | {cell('misleading_names')} |"
+                )
+    return lines
+
+
+def _readability_cell(metrics: dict[str, float], name: str) -> str:
+    value = metrics.get(f"readability_{name}")
+    return "—" if value is None else f"{value:.0f}"
 
 
 def _per_100_calls(run: RunCurves, generator: str = "") -> Optional[float]:

@@ -59,6 +59,7 @@ from mlflow import MlflowClient
 from mlflow.utils.mlflow_tags import MLFLOW_LOGGED_ARTIFACTS, MLFLOW_PARENT_RUN_ID
 
 from colmo.config import OptimizeConfig, SearchConfig
+from colmo.readability import METRICS as READABILITY_METRICS
 from colmo.record import BatchReport, SampleRecord, Summary
 from colmo.store import BEST_POLICY_FILE, BEST_SO_FAR_PLOT, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
 from colmo.track.backend import FAILED, FINISHED, KILLED, browse_hint, default_tracking_uri, log_metrics, log_params, open_experiment, retry_locked
@@ -214,7 +215,8 @@ class MlflowTracker:
     def on_finish(self, summary: Summary) -> None:
         # The rest of the summary's totals were logged with the last batch.
         headline = {name: value for name, value in summary.robustness.items() if name.startswith("robustness_")}
-        log_metrics(self.client, self.run_id, {"best_heldout_score": summary.best_heldout_score, **headline, **_split(summary)}, summary.samples)
+        readable = {f"readability_{name}": summary.readability.get(name) for name in READABILITY_METRICS}
+        log_metrics(self.client, self.run_id, {"best_heldout_score": summary.best_heldout_score, **headline, **_split(summary), **readable}, summary.samples)
         heldout = {entry["sample"]: entry["heldout_score"] for entry in summary.heldout}
         for row in self.rows:
             row["heldout_score"] = heldout.get(row["sample"], row["heldout_score"])
