@@ -7,7 +7,8 @@ and 100 held-out episodes of seed 0, tolerance 0.01, oneplusone re-tuning) for e
 after another, each into OUT/<n>/ (a pair whose result.json is there is not run again), and
 prints the Markdown table: lines, parameters and AST nodes before and after, the branches never
 taken over the training and held-out episodes (`colmo.coverage`) and whether removing them was
-accepted, the other accepted steps, and the referee's scores before and after.
+a step of its own (not, where the static clean-up had removed them already or removing them
+cost score), the other accepted steps, and the referee's scores before and after.
 """
 
 from __future__ import annotations
@@ -33,7 +34,8 @@ def simplified(out: Path, index: int, task: str, policy: str) -> dict:
 def row(task: str, policy: str, result: dict) -> str:
     steps = [step["description"] for step in result["steps"]]
     never = result.get("branches_never_taken", 0)
-    pruned = "—" if not never else f"{never} ({'removed' if any(s.startswith(PRUNED) for s in steps) else 'kept: removing cost score'})"
+    taken = any(s.startswith(PRUNED) for s in steps)
+    pruned = "—" if not never else f"{never} ({'removed' if taken else 'no step of its own: dead code already, or it cost score'})"
     others = sum(not s.startswith(PRUNED) for s in steps)
     return (
         f"| {task} | {policy} | {result['lines_initial']} → {result['lines']} | {result['n_params_initial']} → {result['n_params']} "
