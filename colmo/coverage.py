@@ -150,25 +150,26 @@ class Probe:
 
     @staticmethod
     def _count(counts: list[int], kind: str, function: Callable[..., Any], args: tuple, kwargs: dict, result: Any) -> None:
-        out = np.asarray(result)
         if kind == "where":
             if len(args) != 3:  # `np.where(condition)` finds indices: no choice made
                 return
-            chosen = np.broadcast_to(np.asarray(args[0], dtype=bool), out.shape)
-            counts[0] += out.size
-            counts[1] += int(np.count_nonzero(chosen))
+            counts[0] += np.size(result)
+            counts[1] += _true(np.broadcast_to(np.asarray(args[0], dtype=bool), np.shape(result)))
             return
         # An array's own `.clip(lo, hi)` clips the array it is bound to; `np.clip(a, lo, hi)` its first argument.
         bound = getattr(function, "__self__", None)
-        given = np.asarray(bound if isinstance(bound, np.ndarray) else args[0] if args else kwargs["a"], dtype=float)
-        out = out.astype(float)
-        given = np.broadcast_to(given, out.shape)
-        counts[0] += out.size
-        counts[1] += int(np.count_nonzero(out > given))
-        counts[2] += int(np.count_nonzero(out < given))
+        given = bound if isinstance(bound, np.ndarray) else args[0] if args else kwargs["a"]
+        counts[0] += np.size(result)
+        counts[1] += _true(result > given)
+        counts[2] += _true(result < given)
 
     def result(self) -> list[list[int]]:
         return [list(c) for c in self.counts]
+
+
+def _true(comparison: Any) -> int:
+    """How many entries of a comparison's outcome are true (one bool for scalars: the common case, cheap)."""
+    return int(comparison) if isinstance(comparison, (bool, np.bool_)) else int(np.count_nonzero(comparison))
 
 
 def checked_counts(value: object) -> list[Counts]:

@@ -61,6 +61,7 @@ class StoredProgram:
     island: int
     sample: int  # sample index at which it was generated
     nodes: Optional[int] = None  # AST nodes: its size to read; measured from `code` if not given
+    coverage: Optional[tuple[tuple[int, int, int], ...]] = None  # what each branch did when it was scored (`colmo.coverage`)
 
     def __post_init__(self) -> None:
         if self.nodes is None:

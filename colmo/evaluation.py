@@ -6,7 +6,7 @@
   executor (local processes, a Ray cluster) can carry it.
 - `Evaluation`: its outcome: per-episode returns or the failure reason, the control steps
   simulated, whether racing (`colmo.racing`) cut it short, and what was asked for besides (the
-  referee's recorded episode, the fast path's branch coverage).
+  referee's recorded episode, the program's branch coverage).
 - `Executor`: anything that evaluates batches of requests, results in request order.
 - `Evaluator`: a task's evaluation settings, which make the request for a program.
 """
@@ -56,7 +56,7 @@ class EvalRequest:
     memory_mb: int = 4096  # address-space limit of the process running the policy
     race: Optional[Race] = None
     trace: bool = False  # referee mode: also record the episode (`colmo.trace.EpisodeTrace`)
-    coverage: bool = False  # fast path: also count what each branch did (`colmo.coverage`)
+    coverage: bool = False  # also count what each branch of the program did (`colmo.coverage`)
     label: str = ""  # what is evaluated, for the executor's messages ("sample 12"); workers ignore it
 
 
@@ -136,7 +136,7 @@ class Evaluation:
         if request is not None:
             if trace is not None and not (request.trace and request.mode == REFEREE):
                 raise ValueError("a trace that was not asked for")  # only the worker records one
-            if counts is not None and not (request.coverage and request.mode == FAST):
+            if counts is not None and not request.coverage:
                 raise ValueError("coverage that was not asked for")
             episodes = len(request.seeds)
             if len(returns) > episodes or (len(returns) < episodes and failure is None and not (raced_out and request.race is not None)):

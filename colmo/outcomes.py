@@ -47,7 +47,9 @@ class SampleOutcomes:
     def optimize(self, program: ParametricProgram, sample: int) -> ProgramResult:
         """Tune and score `program`, with a seed of its own from the run's seed and `sample`."""
         seed = int(np.random.SeedSequence([self.cfg.seed, sample + 1]).generate_state(1)[0])
-        evaluate = CandidateEvaluator(self.executor, self.evaluator, program.skeleton, label=f"sample {sample}")
+        evaluate = CandidateEvaluator(
+            self.executor, self.evaluator, program.skeleton, label=f"sample {sample}", count_branches=self.cfg.database.shown_as_run,
+        )
         result = optimize_program(program, evaluate, self.cfg.gfo, seed, stop=self.must_stop)
         self.observe(result)
         return result

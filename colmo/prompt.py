@@ -37,6 +37,7 @@ from typing import Optional, Sequence
 
 from colmo import astutil
 from colmo.astutil import bound_names, identifiers, is_docstring, rename
+from colmo.coverage import Counts, prune
 from colmo.database import Selection
 from colmo.specs import DEFAULT_IMPORTS
 
@@ -146,7 +147,7 @@ def build_prompt(
     assert all(math.isfinite(program.score) for program in programs), "failed programs are never shown"
     assert all(a.score <= b.score for a, b in zip(programs, programs[1:])), "programs must be in ascending score"
 
-    codes = [readable(program.code, function_name) for program in programs]
+    codes = [readable(program.code, function_name, program.coverage) for program in programs]
     imports, definitions, versions, args = _render(codes, function_name)
     new, previous = f"{function_name}_v{len(programs)}", f"{function_name}_v{len(programs) - 1}"
     blind = _blind_versions(codes, function_name, new)
@@ -174,8 +175,10 @@ def build_prompt(
 
 
 @functools.lru_cache(maxsize=64)  # the programs prompts show again and again: cleaned once
-def readable(code: str, function_name: str = "policy") -> str:
-    """`code` as a prompt shows it: without its dead code, literal arithmetic folded
+def readable(code: str, function_name: str = "policy", coverage: Optional[tuple[Counts, ...]] = None) -> str:
+    """`code` as a prompt shows it: with `coverage` (what each branch did when it was scored),
+    without the branches it never took (`colmo.coverage.prune`), so the model improves on what
+    the program does; then without its dead code, literal arithmetic folded
     (`colmo.simplify.deadcode`, for reading: static, the same actions, the policy's docstring
     and named constants kept), so that what mutation left in a program (unused assignments,
     branches on constant conditions) does not stand between the model and its structure; `code`
@@ -184,7 +187,8 @@ def readable(code: str, function_name: str = "policy") -> str:
     from colmo.simplify.deadcode import remove_dead_code
 
     try:
-        return remove_dead_code(code, function_name, for_reading=True)
+        pruned = prune(code, coverage) if coverage else None
+        return remove_dead_code(pruned.code if pruned else code, function_name, for_reading=True)
     except (SyntaxError, RecursionError, ValueError):
         return code
 

@@ -68,6 +68,7 @@ class SampleRecord:
     initial_score: Optional[float] = None
     score: Optional[float] = None
     returns: Optional[tuple[float, ...]] = None  # per training episode, measured by the referee
+    coverage: Optional[tuple[tuple[int, int, int], ...]] = None  # per branch site, as its referee counted them (`colmo.coverage`)
     heldout_score: Optional[float] = None
     evaluations: int = 0
     steps: int = 0  # control steps simulated for this sample
@@ -107,7 +108,8 @@ class SampleRecord:
         settled = cls.of(sample, FAILED if result.failure else EVALUATED, program, result.failure)
         return replace(
             settled, code=result.code, params=tuple(result.params), initial_score=finite_or_none(result.initial.score),
-            score=finite_or_none(result.score), returns=tuple(result.evaluation.returns), evaluations=result.evaluations,
+            score=finite_or_none(result.score), returns=tuple(result.evaluation.returns), coverage=result.evaluation.coverage,
+            evaluations=result.evaluations,
             steps=result.steps, raced_out=result.raced_out, cut_short=result.cut_short, evaluation_seconds=result.seconds,
             lines=result.size.lines, nodes=result.size.nodes,
         )

@@ -323,7 +323,7 @@ class Search:
         self.counters.count(record)
         if record.status == EVALUATED:
             before = self.database.best.score
-            self.database.register(StoredProgram(record.key, record.code, record.score, record.island, record.sample, record.nodes))
+            self.database.register(StoredProgram(record.key, record.code, record.score, record.island, record.sample, record.nodes, record.coverage))
             if self.database.best.score > before:
                 self.best_so_far.append((self.counters.samples, self.database.best.score))
         elif record.key and record.status != INTERRUPTED:

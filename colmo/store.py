@@ -46,7 +46,7 @@ BEST_SO_FAR_PLOT = "best_so_far.png"  # the best score so far per model call: an
 LOCK_FILE = ".colmo.lock"
 
 _SQL_TYPES = {"int": "INTEGER", "float": "REAL", "str": "TEXT", "bool": "INTEGER"}
-_JSON_FIELDS = ("parent_keys", "initial_params", "params", "returns")
+_JSON_FIELDS = ("parent_keys", "initial_params", "params", "returns", "coverage")
 # The run table holds the run's settings, and under this name the time the run has taken (`Elapsed`).
 _ELAPSED = "elapsed"
 
@@ -69,6 +69,7 @@ CREATE INDEX IF NOT EXISTS samples_key ON samples(key);
 _ADDED_COLUMNS = {
     "model_calls": "INTEGER NOT NULL DEFAULT 1",  # one model call per sample then
     "prompt_shown": "TEXT NOT NULL DEFAULT ''",  # chat answers were read without the shown code then
+    "coverage": "TEXT",  # branches were not counted then
 }
 
 
@@ -154,6 +155,8 @@ class ProgramStore:
             for name in _JSON_FIELDS:
                 if row[name] is not None:
                     row[name] = tuple(json.loads(row[name]))
+            if row["coverage"] is not None:  # a site's counts are a tuple too
+                row["coverage"] = tuple(map(tuple, row["coverage"]))
             row["cut_short"] = bool(row["cut_short"])
             yield SampleRecord(**row)
 

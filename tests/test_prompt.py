@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -360,3 +362,18 @@ def test_a_mutated_program_is_shown_without_what_mutation_left_in_it():
     assert prompt.programs == [MUTATED] and prompt.parent_keys == [program.key]
     for showing in (prompt.text, prompt.messages[1]["content"]):
         assert shown in showing
+
+
+def test_a_shown_program_leaves_out_the_branches_it_never_took():
+    """Issue 38 part 2: the model improves on what a program does, not on a branch that never ran."""
+    code = (
+        "import numpy as np\n\ndef policy(obs):\n    if obs[0] > 1.5:\n        return 5.0 * obs[1]\n"
+        "    return np.clip(-2.0 * obs[2], -1.0, 1.0)"
+    )
+    counted = StoredProgram("k-counted", code, 3.0, 2, 7, coverage=((1000, 0, 0), (1000, 120, 90)))
+    prompt = build_prompt(DESCRIPTION, Selection(2, [LOW, counted]))
+    shown = prompt.shown_code
+    assert "obs[0] > 1.5" not in shown and "5.0 * obs[1]" not in shown and "np.clip(-2.0 * obs[2], -1.0, 1.0)" in shown
+    assert prompt.programs[-1] == code  # the program as stored and scored
+    uncounted = build_prompt(DESCRIPTION, Selection(2, [LOW, dataclasses.replace(counted, coverage=None)]))
+    assert "obs[0] > 1.5" in uncounted.shown_code

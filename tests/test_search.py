@@ -11,6 +11,7 @@ from collections import Counter
 import pytest
 from conftest import compose, refused, run_colmo, start_colmo
 
+from colmo import coverage
 from colmo.__main__ import main as colmo
 from colmo.generate import Generation, Generator
 from colmo.record import SampleRecord
@@ -49,6 +50,9 @@ def test_small_search_end_to_end(tmp_path):
     for site in summary["coverage"]["sites"]:  # what each branch of the best policy did, as comments
         assert f"# coverage: {site['says']}\n" in best
     assert [r[0] for r in rows] == list(range(-1, len(rows) - 1))  # the starter, then every sample once
+    # every program's branches, as its referee counted them, for the prompts that show it
+    counted = [record for record in ProgramStore(run_dir / "programs.db").records() if record.status == "evaluated" and record.sample >= 0]
+    assert counted and all(record.coverage is not None and len(record.coverage) == len(coverage.sites(record.code)) for record in counted)
     assert f"best score {summary['best_score']:.2f}" in result.stdout
 
 
@@ -261,12 +265,17 @@ def test_without_gfo_a_chat_model_is_told_it_repeated_a_program_and_other_genera
 def test_a_store_written_before_model_calls_were_counted_opens_with_one_call_per_sample(tmp_path):
     store = ProgramStore(tmp_path / "programs.db")
     store.add(SampleRecord(sample=0, batch=0, status="duplicate", island=0, parent_keys=(), generator="old", raw="x"))
-    for column in ("model_calls", "prompt_shown"):  # the schema of older stores
+    for column in ("model_calls", "prompt_shown", "coverage"):  # the schema of older stores
         store.connection.execute(f"ALTER TABLE samples DROP COLUMN {column}")
     store.close()
     reopened = ProgramStore(tmp_path / "programs.db")
-    reopened.add(SampleRecord(sample=1, batch=1, status="duplicate", island=0, parent_keys=(), generator="new", raw="y", model_calls=3, prompt_shown="z"))
-    assert [(record.sample, record.model_calls, record.prompt_shown) for record in reopened.records()] == [(0, 1, ""), (1, 3, "z")]
+    reopened.add(SampleRecord(
+        sample=1, batch=1, status="duplicate", island=0, parent_keys=(), generator="new", raw="y", model_calls=3, prompt_shown="z",
+        coverage=((10, 0, 0), (10, 4, 0)),
+    ))
+    assert [(record.sample, record.model_calls, record.prompt_shown, record.coverage) for record in reopened.records()] == [
+        (0, 1, "", None), (1, 3, "z", ((10, 0, 0), (10, 4, 0))),
+    ]
     reopened.close()
 
 

@@ -22,6 +22,10 @@ class DatabaseConfig:
     length_temperature: float = option(1.0, "within a cluster, shorter programs are preferred")
     size_penalty: float = option(0.0, "clusters are drawn by score minus this many points per AST node of their smallest program")
     max_nodes: Optional[int] = option(None, "programs bigger than this many AST nodes are refused before they are evaluated; null: no cap")
+    shown_as_run: bool = option(
+        True, "prompts show each program without the branches its final scoring never took (the referee's child counts "
+        "them: colmo.coverage); false: as stored",
+    )
     max_shown_nodes: Optional[int] = option(
         1000, "programs bigger than this many AST nodes are never shown in a prompt, though they count and can be the best "
         "(the prompt must fit the model's context: a policy of a few hundred nodes is typical); null: no cap",

@@ -52,14 +52,18 @@ NONDETERMINISTIC = "nondeterministic:"  # ... and of one whose episodes the refe
 class CandidateEvaluator:
     """Evaluations of one program's parameter vectors on a task: fast (GFO candidates, raced
     and split over `episode_chunks` requests when asked) or by the referee (final scores);
-    `label` names the program in the executor's messages (a lost worker says what it held)."""
+    `label` names the program in the executor's messages (a lost worker says what it held);
+    with `count_branches` the referee's evaluations carry the program's branch coverage."""
 
-    def __init__(self, executor: Executor, evaluator: Evaluator, skeleton: str, episode_chunks: int = 1, label: str = ""):
+    def __init__(
+        self, executor: Executor, evaluator: Evaluator, skeleton: str, episode_chunks: int = 1, label: str = "", count_branches: bool = False,
+    ):
         self.executor = executor
         self.evaluator = evaluator
         self.skeleton = skeleton
         self.chunks = evaluator.seed_chunks(episode_chunks)
         self.label = label
+        self.count_branches = count_branches  # the referee's evaluations count what each branch did
 
     def fast(self, params_list: Sequence[Sequence[float]], race: Optional[Race] = None) -> list[Evaluation]:
         """Each vector's fast-path evaluation. With `race` (its `incumbent` over all seeds) the
@@ -85,9 +89,12 @@ class CandidateEvaluator:
 
     def referee(self, params: Sequence[float], timeout_s: Optional[float] = None) -> Evaluation:
         """The referee's evaluation of one vector over all the seeds (split over
-        `episode_chunks` requests), each request limited to `timeout_s` if given."""
+        `episode_chunks` requests), each request limited to `timeout_s` if given; with
+        `count_branches`, what each branch did besides (`Evaluation.coverage`)."""
         requests = [
-            self.evaluator.request(self.skeleton, params, seeds=chunk, mode=REFEREE, timeout_s=timeout_s, label=self.label)
+            self.evaluator.request(
+                self.skeleton, params, seeds=chunk, mode=REFEREE, timeout_s=timeout_s, coverage=self.count_branches, label=self.label,
+            )
             for chunk in self.chunks
         ]
         return Evaluation.joined(self.executor.evaluate(requests))

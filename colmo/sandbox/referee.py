@@ -20,7 +20,9 @@ the payload. Worker to child: `S` + a batch's first episode index (uint32) and i
 their indices (uint32 each, ascending) and their observations (float64, one row each), and
 `Q` to quit. Child to worker, per `O`: an `F` frame (an episode index, uint32, and a failure
 reason, UTF-8) for each live episode whose policy failed, then `A` + the actions of the
-others, in order (float64, exactly `action_size` values each), all in one write. Every write
+others, in order (float64, exactly `action_size` values each), all in one write; after `Q`,
+where the request asks for branch coverage (`colmo.coverage`), `C` + the counts of each site
+(three uint64 each). Every write
 of the worker is bounded by the request's deadline: a child that stops reading cannot block
 it. Its descriptors are non-blocking, so a step costs it one write and one read, and a wait
 (bounded by the deadline) only when the child has not answered yet. What each side derives
@@ -41,6 +43,7 @@ returns exactly what the fast path returns for an honest program.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import select
@@ -50,6 +53,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from colmo.coverage import Counts, checked_counts
 from colmo.environments.base import Environment, PolicyFailure
 from colmo.errors import describe_exception, failure_reason
 from colmo.evaluation import EvalRequest, Evaluation
@@ -61,6 +65,7 @@ _HEADER = struct.Struct("<cI")
 _COUNT = struct.Struct("<I")  # an episode index or count
 _MAX_FRAME = 1 << 20
 LOCKSTEP = 16  # episodes stepped side by side: the environments the worker keeps per task
+_COVERAGE_WAIT_S = 2.0  # for the child's counts after `Q`: a child that keeps them costs the worker no more
 
 
 class RefereeTimeout(Exception):
@@ -156,7 +161,7 @@ def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd:
     """The child's side: a fresh program instance per episode, then, for each step, the
     actions of the live episodes (or why an episode's policy failed) until told to quit."""
     channel = _Channel(read_fd, write_fd)
-    program, refusal = compile_or_explain(request.skeleton, request.allowed_imports, request.params)
+    program, refusal = compile_or_explain(request.skeleton, request.allowed_imports, request.params, request.coverage)
     policies: dict[int, Callable[..., object]] = {}
     failures: list[tuple[int, str]] = []
     step = 0
@@ -179,6 +184,10 @@ def serve_policy(request: EvalRequest, action_size: int, read_fd: int, write_fd:
                     failures.append((index, failure_reason(str(failure))))
             continue
         if tag != b"O":
+            if tag == b"Q" and program is not None and program.probe is not None:
+                counts = np.asarray(program.probe.result(), dtype="<u8").tobytes()
+                if len(counts) <= _MAX_FRAME:
+                    channel.send(frame(b"C", counts))
             return
         (count,) = _COUNT.unpack_from(payload)
         header = _COUNT.size + 4 * count
@@ -229,6 +238,8 @@ def referee_evaluation(envs: Sequence[Environment], request: EvalRequest, read_f
             break
     channel.send(frame(b"Q"))
     evaluation = episodes.evaluation()
+    if request.coverage:
+        evaluation = dataclasses.replace(evaluation, coverage=_coverage(channel))
     if recorder is None or evaluation.failure is not None:
         return evaluation
     try:
@@ -236,6 +247,20 @@ def referee_evaluation(envs: Sequence[Environment], request: EvalRequest, read_f
     except TraceError as error:  # e.g. non-finite observations: nothing a renderer could draw
         return Evaluation(evaluation.returns, str(error), evaluation.steps)
     return Evaluation(evaluation.returns, None, evaluation.steps, trace=trace)
+
+
+def _coverage(channel: _Channel) -> tuple[Counts, ...] | None:
+    """The counts the child sends after `Q` when the request asks for coverage (`colmo.coverage`),
+    or None where it sends none in time or a malformed frame: they describe the program, and take
+    no part in its score, so their absence fails nothing."""
+    channel.deadline = min(channel.deadline, time.monotonic() + _COVERAGE_WAIT_S)
+    try:
+        tag, payload = channel.receive()
+        if tag != b"C" or len(payload) % 24:
+            return None
+        return tuple(checked_counts(np.frombuffer(payload, dtype="<u8").reshape(-1, 3).tolist()))
+    except (RefereeTimeout, EOFError, OSError, ValueError):
+        return None
 
 
 class _Exchange:
