@@ -130,7 +130,7 @@ class Search:
             cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop,
             observe=lambda result: self.budget.observe(result),
         )
-        self.budget = TimeBudget(cfg.search.max_seconds, self.outcomes.running, started=started, tuned=tunes_constants(cfg.gfo))
+        self.budget = TimeBudget(cfg.search.max_seconds, self.outcomes.running, started=started, tuned=tunes_constants(cfg.gfo), spent=self.earlier.seconds)
         self.evaluator: Optional[Evaluator] = None
         self.database: Optional[ProgramDatabase] = None
 

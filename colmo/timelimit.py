@@ -1,6 +1,6 @@
 """A search's time: the limit `search.max_seconds`, counted from the start of the run's job (a
 single run's process, imports and Hydra included; each job of a `-m` sweep from its own start,
-whichever launcher runs it: `job_start`); the search's own deadline, early enough to leave the programs in
+whichever launcher runs it: `job_start`), less what a resumed run's earlier processes took; the search's own deadline, early enough to leave the programs in
 flight their final scores and the finish its held-out scores, simplification and video
 (`colmo.finish.plan_finish`, from the starter's calibration); and the run's estimated
 duration, said in one line before the first batch with the limit that binds, from the starter's
@@ -62,16 +62,24 @@ class TimeBudget:
 
     def __init__(
         self, max_seconds: float, programs_in_flight: Callable[[], int] = lambda: 0, started: Optional[float] = None, tuned: bool = True,
+        spent: float = 0.0,
     ):
         """`started`: when the limit began (`time.perf_counter()`: the job's start, `job_start`; default: now);
         `tuned`: whether programs are tuned (their final scores are then a fast-path and a
-        referee evaluation, not the referee's alone)."""
+        referee evaluation, not the referee's alone); `spent`: seconds of the limit a resumed
+        run's earlier processes took (the store's `Elapsed`): the limit is the whole run's, as
+        `search.max_samples` is, so a run stopped and resumed gets what a run never stopped gets."""
         self.max_seconds = max_seconds
         self.tuned = tuned
         self.programs_in_flight = programs_in_flight  # programs being tuned now (the search's program threads)
         self.start = time.perf_counter()
         self._job_start = self.start if started is None else started
-        self.end = self._job_start + max_seconds if max_seconds else math.inf
+        # A run resumed past its limit gets a second: it ends at once, its finish cut to the least.
+        self.end = self._job_start + max(max_seconds - spent, 1.0) if max_seconds else math.inf
+        if max_seconds and spent:
+            log.info(
+                "resumed after %s of the run's search.max_seconds=%g: %s left", duration(spent), max_seconds, duration(max(max_seconds - spent, 0.0)),
+            )
         self._searching: Optional[float] = None  # when the first batch began (`search_starts`)
         self._stopped: Optional[float] = None  # when the search stopped (`search_stops`)
         self._starter_deadline = self.start + _STARTER_SHARE * (self.end - self.start)
@@ -95,7 +103,7 @@ class TimeBudget:
         self._available = 0.0  # for the finish, at the calibration's speed
 
     def elapsed(self) -> float:
-        """Seconds since the search started in this process (a resumed run's limit is its own)."""
+        """Seconds since the search started in this process."""
         return time.perf_counter() - self.start
 
     @property

@@ -226,3 +226,11 @@ def test_a_starter_with_nothing_to_tune_leaves_the_first_estimate_to_the_samples
         budget.plan(cfg, (1.0, 1.0), program_seconds=0.0, executor=IdleWorkers())
     assert budget.estimated_seconds is None
     assert "estimated duration: search estimated once the first samples are in (the starter has no constants to tune" in caplog.text
+
+
+def test_a_resumed_run_has_what_its_earlier_processes_left_of_the_limit():
+    """`search.max_seconds` is the whole run's, as `search.max_samples` is: a run stopped after
+    40 s of a 100 s limit and resumed searches 60 s more, not 100 (equal budgets in a sweep)."""
+    assert 59.0 < TimeBudget(100.0, spent=40.0).limit_seconds <= 60.0
+    assert TimeBudget(100.0, spent=250.0).limit_seconds <= 1.0  # resumed past its limit: it ends at once
+    assert TimeBudget(0.0, spent=40.0).limit_seconds == 0.0  # no limit stays none

@@ -173,7 +173,7 @@ def recorded_elapsed(run_dir: Path) -> dict[str, float]:
 def test_a_resumed_run_counts_the_time_of_its_earlier_processes(tmp_path):
     """A run's seconds (summary.json, and the rates and per-second plots made from them) are the
     whole run's: its store records the time taken after every batch and at the end, and a
-    resumed run adds its own process's time to it, while its time limit stays its own."""
+    resumed run adds its own process's time to it."""
     overrides = ("gfo=none", *TINY)
     run_dir = tmp_path / "run"
     first = Search(compose("search", "search.max_samples=4", *overrides), run_dir).run()
