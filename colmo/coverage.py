@@ -10,9 +10,10 @@ value the observation never takes. Coverage measures what each branch did:
 
 `instrument` rewrites a checked program's tree so that each such site reports to a `Probe`
 (the names it calls start with `__`, which the static check refuses in a program, so the
-program cannot reach them); the sandbox worker runs it in place of the program when an
-evaluation asks for coverage (`EvalRequest.coverage`, fast path only), and sends the counts back
-with the evaluation. They come from the program's own process, so they describe the program; they
+program cannot reach them); the sandbox runs it in place of the program when an evaluation asks
+for coverage (`EvalRequest.coverage`: on the fast path the worker's child, in referee mode the
+policy's child, which sends its counts after the episodes), and the counts come back with the
+evaluation. They come from the program's own process, so they describe the program; they
 never take part in a score. `annotate` writes them into the program's text as a comment line
 above each statement that holds a site, which is how `best_policy.py` carries them.
 Sites are numbered in the order one walk of the tree meets them, the same for a program's
@@ -34,7 +35,7 @@ BRANCH, CALL = "__colmo_branch__", "__colmo_call__"
 CONDITION_KINDS = ("if", "while", "conditional")
 CALL_KINDS = ("clip", "where")
 MAX_SITES = 100_000  # far more than a program under the intake's node limit can hold
-Counts = tuple[int, int, int]  # tests or values, then true (or raised to the lower limit), then lowered to the upper limit
+Counts = tuple[int, int, int]  # tests (or values), then true (or raised by a clip), then lowered by a clip
 
 
 @dataclass(frozen=True)
@@ -163,8 +164,8 @@ class Probe:
         counts[1] += _true(result > given)
         counts[2] += _true(result < given)
 
-    def result(self) -> list[list[int]]:
-        return [list(c) for c in self.counts]
+    def result(self) -> tuple[Counts, ...]:
+        return tuple((tests, first, second) for tests, first, second in self.counts)
 
 
 def _true(comparison: Any) -> int:
@@ -172,7 +173,7 @@ def _true(comparison: Any) -> int:
     return int(comparison) if isinstance(comparison, (bool, np.bool_)) else int(np.count_nonzero(comparison))
 
 
-def checked_counts(value: object) -> list[Counts]:
+def checked_counts(value: object) -> tuple[Counts, ...]:
     """Counts from a sandbox reply, as data: a list of at most `MAX_SITES` triples of
     non-negative integers, each part at most the first; `ValueError` otherwise."""
     if not isinstance(value, list) or len(value) > MAX_SITES:
@@ -184,14 +185,14 @@ def checked_counts(value: object) -> list[Counts]:
         if item[1] > item[0] or item[2] > item[0] or item[1] + item[2] > item[0]:
             raise ValueError("coverage counts more than a site's tests")
         counts.append((item[0], item[1], item[2]))
-    return counts
+    return tuple(counts)
 
 
-def added(parts: Sequence[Optional[Sequence[Counts]]]) -> Optional[list[Counts]]:
+def added(parts: Sequence[Optional[Sequence[Counts]]]) -> Optional[tuple[Counts, ...]]:
     """The counts of one program over several requests, or None if any part has none."""
     if not parts or any(p is None for p in parts) or len({len(p) for p in parts}) != 1:
         return None
-    return [tuple(sum(c) for c in zip(*site)) for site in zip(*parts)]  # type: ignore[misc]
+    return tuple(tuple(sum(c) for c in zip(*site)) for site in zip(*parts))  # type: ignore[misc]
 
 
 class _Pruned(ast.NodeTransformer):
@@ -290,6 +291,11 @@ def annotate(code: str, counts: Sequence[Counts], label: str = "coverage") -> Op
     if ast.dump(astutil.parse(text)) != ast.dump(astutil.parse(code)):
         return None
     return text
+
+
+def counts_of(summary: dict[str, Any]) -> list[Counts]:
+    """The counts a `summary` holds, site by site ([] for an empty one)."""
+    return [tuple(site["counts"]) for site in summary.get("sites", ())]  # type: ignore[misc]
 
 
 def summary(code: str, counts: Sequence[Counts], episodes: int) -> dict[str, Any]:

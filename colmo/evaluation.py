@@ -86,10 +86,9 @@ class Evaluation:
             return parts[0]
         returns = tuple(r for part in parts for r in part.returns)
         failure = next((part.failure for part in parts if part.failure), None)
-        counts = added([part.coverage for part in parts])
         return cls(
             returns, failure, sum(part.steps for part in parts), any(part.raced_out for part in parts), sum(part.seconds for part in parts),
-            coverage=None if counts is None else tuple(counts),
+            coverage=added([part.coverage for part in parts]),
         )
 
     def to_bytes(self) -> bytes:
@@ -123,7 +122,7 @@ class Evaluation:
             raise ValueError("not a JSON object")
         returns, failure, steps = reply.get("returns"), reply.get("failure"), reply.get("steps")
         raced_out, seconds, trace = reply.get("raced_out"), reply.get("seconds"), reply.get("trace")
-        counts = None if reply.get("coverage") is None else tuple(checked_counts(reply["coverage"]))
+        counts = None if reply.get("coverage") is None else checked_counts(reply["coverage"])
         if (
             not isinstance(returns, list) or not all(type(r) is float and math.isfinite(r) for r in returns)
             or not isinstance(failure, (str, type(None))) or type(steps) is not int or steps < 0

@@ -38,9 +38,8 @@ from colmo.config import SearchConfig
 from colmo.coverage import Pruned
 from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor
-from colmo.heldout import heldout_evaluator, heldout_score, robustness_of
+from colmo.heldout import branch_counts, heldout_evaluator, heldout_score, robustness_of
 from colmo.names import misnamed
-from colmo.optimize.tune import CandidateEvaluator
 from colmo.record import EVALUATED, SampleRecord, Summary, Totals
 from colmo.robustness import grid_points, save
 from colmo.sandbox.referee import LOCKSTEP
@@ -258,7 +257,7 @@ def finish(
         else:
             # What is being scored when it stops still ends: about two such measurements.
             step = time.monotonic()
-            hint = coverage.prune(top[0].code, [tuple(site["counts"]) for site in best.coverage["sites"]]) if best.coverage else None
+            hint = coverage.prune(top[0].code, coverage.counts_of(best.coverage)) if best.coverage else None
             best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until - 2 * best_took, plan.reduced, hint)
             took["simplification"] = time.monotonic() - step
     best.readability = readability.report(top[0].code, best.coverage, best.simplified, best.misnamed)
@@ -298,7 +297,7 @@ def _coverage(executor: Executor, evaluator: Evaluator, heldout: Evaluator, reco
         log.warning("no time left to count the best policy's branches (search.max_seconds)")
         return {}
     scale = max(math.ceil(len(both.seeds) / workers) / len(evaluator.seeds), 1.0)  # a chunk against the calibrated request
-    evaluation = CandidateEvaluator(executor, both, record.skeleton, workers).coverage(record.params, min(evaluator.timeout_s * scale, _left(until)))
+    evaluation = branch_counts(executor, both, record.skeleton, record.params, min(evaluator.timeout_s * scale, _left(until)))
     if evaluation.failure or evaluation.coverage is None:
         log.warning("no branch coverage of the best policy: %s", evaluation.failure or "no counts")
         return {}

@@ -55,8 +55,8 @@ def bound_entries(code: str, argument: str = "obs", function_name: str = "policy
         if not isinstance(node, ast.Assign) or len(node.targets) != 1:
             continue
         target, value = node.targets[0], node.value
-        if isinstance(target, ast.Name) and _is_entry(value, argument) is not None:
-            bound.append((target.id, _is_entry(value, argument)))
+        if isinstance(target, ast.Name) and (index := _is_entry(value, argument)) is not None:
+            bound.append((target.id, index))
         elif isinstance(target, ast.Tuple) and isinstance(value, ast.Name) and value.id == argument:
             bound += [(element.id, index) for index, element in enumerate(target.elts) if isinstance(element, ast.Name)]
     return bound

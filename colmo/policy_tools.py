@@ -21,9 +21,8 @@ from typing import Any, Optional
 
 from colmo.config import PolicyFileConfig
 from colmo.evaluation import Evaluation, Evaluator, Executor
-from colmo.heldout import heldout_evaluator, task_evaluator
+from colmo.heldout import branch_counts, heldout_evaluator, task_evaluator
 from colmo.intake import read_policy_file
-from colmo.optimize.tune import CandidateEvaluator
 from colmo.program import ParametricProgram
 from colmo.specs import Spec, load_task_spec
 
@@ -47,8 +46,7 @@ class PolicySession:
     def branch_counts(self, evaluator: Evaluator) -> Evaluation:
         """The fast path's evaluation of the policy on `evaluator`'s episodes, spread over the
         workers, with what each of its branches did (`colmo.coverage`)."""
-        program = self.program
-        return CandidateEvaluator(self.executor, evaluator, program.skeleton, self.executor.n_workers).coverage(program.values)
+        return branch_counts(self.executor, evaluator, self.program.skeleton, self.program.values)
 
 
 def check_policy_file(cfg: PolicyFileConfig) -> Spec:

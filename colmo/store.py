@@ -29,7 +29,7 @@ from dataclasses import asdict, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Mapping, Optional
 
-from colmo.coverage import annotate
+from colmo.coverage import annotate, counts_of
 from colmo.errors import ConfigError, RunError
 from colmo.record import TO_EVALUATE_AGAIN, Elapsed, SampleRecord, Summary
 
@@ -324,8 +324,7 @@ def write_outputs(summary: Summary, run_dir: Path) -> None:
 
 def _with_coverage(code: str, counted: dict[str, Any]) -> str:
     """The best policy's code with what each branch did as comments (`colmo.coverage`), if counted."""
-    sites = counted.get("sites")
-    annotated = annotate(code, [tuple(site["counts"]) for site in sites]) if sites else None
+    annotated = annotate(code, counts_of(counted)) if counted.get("sites") else None
     if annotated is None:
         return code
     return f"# branches counted over {counted['episodes']} training and held-out episodes (fast path)\n" + annotated

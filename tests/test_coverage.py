@@ -54,20 +54,20 @@ def test_the_probe_counts_each_branch_and_leaves_the_program_s_actions_unchanged
     observations = [np.array([np.cos(t), np.sin(t), w]) for t, w in ((0.1, 1.0), (1.5, -2.0), (1.5, 2.0), (3.0, 0.0))]
     for obs in observations:
         assert np.array_equal(policy(obs), plain(obs))
-    assert counted.probe.result() == [
-        [4, 0, 0],  # cos θ > 1.5: never
-        [4, 2, 0],  # ω > 0
-        [4, 2, 0],  # sin θ > 0.9: the two at θ = 1.5
-        [2, 1, 0],  # np.where: one value of two chose 0.5
-        [4, 1, 3],  # the inverted clip returns its upper limit, -0.8, whatever it is given: -1 raised, the rest lowered
-    ]
+    assert counted.probe.result() == (
+        (4, 0, 0),  # cos θ > 1.5: never
+        (4, 2, 0),  # ω > 0
+        (4, 2, 0),  # sin θ > 0.9: the two at θ = 1.5
+        (2, 1, 0),  # np.where: one value of two chose 0.5
+        (4, 1, 3),  # the inverted clip returns its upper limit, -0.8, whatever it is given: -1 raised, the rest lowered
+    )
 
 
 def test_an_array_s_own_clip_counts_against_the_array_it_is_bound_to():
     program = parametrize("import numpy as np\n\ndef policy(obs):\n    return (obs * 10.0).clip(-1.0, 1.0)\n")
     counted = Program(program.skeleton, ("numpy",), program.values, coverage=True)
     counted.load()(np.array([0.05, 0.5, -0.5]))
-    assert counted.probe.result() == [[3, 1, 1]]
+    assert counted.probe.result() == ((3, 1, 1),)
 
 
 def test_annotated_code_carries_one_comment_per_site_and_is_the_same_program():

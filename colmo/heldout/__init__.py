@@ -38,6 +38,13 @@ def heldout_score(executor: Executor, evaluator: Evaluator, skeleton: str, param
     return CandidateEvaluator(executor, evaluator, skeleton, executor.n_workers).referee(params, timeout_s)
 
 
+def branch_counts(executor: Executor, evaluator: Evaluator, skeleton: str, params: Sequence[float], timeout_s: Optional[float] = None) -> Evaluation:
+    """The fast path's evaluation of one program on `evaluator`'s episodes, spread over the
+    executor's workers, with what each of its branches did (`Evaluation.coverage`,
+    `colmo.coverage`); each part limited to `timeout_s` if given."""
+    return CandidateEvaluator(executor, evaluator, skeleton, executor.n_workers).coverage(params, timeout_s)
+
+
 def training_evaluator(spec: Spec, task: TaskConfig, executor_cfg: ExecutorConfig, executor: Executor, seed: int) -> Evaluator:
     """The evaluator of `spec` on the training episodes of `seed` (under `task.perturb`, if
     set), with time limits calibrated on the spec's starter policy."""

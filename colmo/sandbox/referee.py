@@ -258,7 +258,7 @@ def _coverage(channel: _Channel) -> tuple[Counts, ...] | None:
         tag, payload = channel.receive()
         if tag != b"C" or len(payload) % 24:
             return None
-        return tuple(checked_counts(np.frombuffer(payload, dtype="<u8").reshape(-1, 3).tolist()))
+        return checked_counts(np.frombuffer(payload, dtype="<u8").reshape(-1, 3).tolist())
     except (RefereeTimeout, EOFError, OSError, ValueError):
         return None
 

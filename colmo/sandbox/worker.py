@@ -210,7 +210,7 @@ def _run_program(env: Environment, request: EvalRequest) -> Evaluation:
         evaluation = evaluate_program(env, program.new_policy, request.seeds, request.steps, request.race)
     except BaseException as error:  # SystemExit and friends raised by the policy
         return Evaluation(failure=describe_exception(error))
-    return evaluation if program.probe is None else dataclasses.replace(evaluation, coverage=tuple(map(tuple, program.probe.result())))
+    return evaluation if program.probe is None else dataclasses.replace(evaluation, coverage=program.probe.result())
 
 
 def _fork_child(request: EvalRequest, keep: tuple[int, ...], run: Callable[[], Any]) -> int:

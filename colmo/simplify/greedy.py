@@ -228,9 +228,10 @@ def simplify(
     if hint is not None and not stop():
         hinted = remove_dead_code(hint.code, function_name)
         hinted_scores = scorer.both([hinted])[0]
-        if rule.accepts(hinted_scores) and measure(hinted).nodes < measure(current).nodes:
+        hinted_size = measure(hinted)
+        if rule.accepts(hinted_scores) and hinted_size.nodes < measure(current).nodes:
             current, scores = hinted, hinted_scores
-            steps.append(Step(hint.description, current, scores, measure(current)))
+            steps.append(Step(hint.description, current, scores, hinted_size))
 
     rounds = 0
     while rounds < max_rounds and not stop():
