@@ -3,7 +3,9 @@
     python scripts/mixed_summary.py OUT
 
 Per run (OUT/<task>/<variant>/s<seed>/<job>/summary.json): the best training and held-out scores,
-samples, each generator's share, and the simplified winner's lines and parameters.
+samples, each generator's share, and the simplified winner's lines and parameters. Then per task,
+each variant against mutation alone: the difference of means with its bootstrap interval
+(`colmo.comparison.difference`), training and held-out.
 """
 
 from __future__ import annotations
@@ -12,7 +14,9 @@ import json
 import sys
 from pathlib import Path
 
-from colmo.comparison import mean_std
+from colmo.comparison import difference, mean_std
+
+BASELINE = "mutate"  # the variant every other is compared with
 
 
 def _score(value: float | None) -> str:
@@ -28,9 +32,17 @@ def row(path: Path) -> dict:
         for name, entry in summary.get("by_generator", {}).items()
     )
     return {
-        "task": task, "variant": variant, "seed": seed, "best": summary["best_score"], "heldout": summary["best_heldout_score"],
-        "samples": summary["samples"], "split": split, "lines": simplified.get("lines"), "params": simplified.get("n_params"),
-        "seconds": summary["seconds"], "stop": summary["stop_reason"],
+        "task": task,
+        "variant": variant,
+        "seed": seed,
+        "best": summary["best_score"],
+        "heldout": summary["best_heldout_score"],
+        "samples": summary["samples"],
+        "split": split,
+        "lines": simplified.get("lines"),
+        "params": simplified.get("n_params"),
+        "seconds": summary["seconds"],
+        "stop": summary["stop_reason"],
     }
 
 
@@ -53,6 +65,17 @@ def main(out: Path) -> None:
         best = [r["best"] for r in group]
         heldout = [r["heldout"] for r in group if r["heldout"] is not None]
         print(f"| {key[0]} | {key[1]} | {len(group)} | {mean_std(best)} | {mean_std(heldout) if heldout else '-'} |")
+    print()
+    print("| task | variant − mutate | seeds | best | held-out |")
+    print("|---|---|---|---|---|")
+    for task, variant in sorted({(r["task"], r["variant"]) for r in rows if r["variant"] != BASELINE}):
+        mine = [r for r in rows if (r["task"], r["variant"]) == (task, variant)]
+        theirs = [r for r in rows if (r["task"], r["variant"]) == (task, BASELINE)]
+        if not theirs:
+            continue
+        best = difference([r["best"] for r in theirs], [r["best"] for r in mine])
+        heldout = difference([r["heldout"] for r in theirs if r["heldout"] is not None], [r["heldout"] for r in mine if r["heldout"] is not None])
+        print(f"| {task} | {variant} | {len(mine)} vs {len(theirs)} | {best.text()} | {heldout.text()} |")
 
 
 if __name__ == "__main__":

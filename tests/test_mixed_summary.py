@@ -1,0 +1,33 @@
+"""scripts/mixed_summary.py reads finished runs' summaries and compares each variant with mutation alone."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "mixed_summary.py"
+
+
+def _run(out: Path, variant: str, seed: int, best: float, heldout: float, stop: str = "max_seconds") -> None:
+    job = out / "pendulum" / variant / f"s{seed}" / "0_job"
+    job.mkdir(parents=True)
+    summary = {
+        "best_score": best, "best_heldout_score": heldout, "samples": 10, "seconds": 1790.0, "stop_reason": stop,
+        "by_generator": {"mutate": {"samples": 10, "programs_evaluated": 9, "best_score": best}},
+        "simplified": {"lines": 4, "n_params": 2},
+    }
+    (job / "summary.json").write_text(json.dumps(summary))
+
+
+def test_the_table_compares_each_variant_with_mutation_alone(tmp_path: Path) -> None:
+    for seed, (mixed, mutate) in enumerate([(700.0, 800.0), (720.0, 810.0), (710.0, 820.0)]):
+        _run(tmp_path, "mixed", seed, mixed, mixed - 10)
+        _run(tmp_path, "mutate", seed, mutate, mutate - 10)
+    _run(tmp_path, "mutate", 3, 100.0, 90.0, stop="interrupted")  # stopped early: resumed, not reported
+    text = subprocess.run([sys.executable, str(SCRIPT), str(tmp_path)], capture_output=True, text=True, check=True).stdout
+    assert "| pendulum | mutate | 3 | 810.0 ± 10.0 | 800.0 ± 10.0 |" in text
+    assert "| pendulum | mixed | 3 | 710.0 ± 10.0 | 700.0 ± 10.0 |" in text
+    (line,) = [line for line in text.splitlines() if line.startswith("| pendulum | mixed | 3 vs 3 |")]
+    assert line.count("-100.0, 95% interval [") == 2 and "no significant" not in line
