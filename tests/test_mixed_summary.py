@@ -14,7 +14,11 @@ def _run(out: Path, variant: str, seed: int, best: float, heldout: float, stop: 
     job = out / "pendulum" / variant / f"s{seed}" / "0_job"
     job.mkdir(parents=True)
     summary = {
-        "best_score": best, "best_heldout_score": heldout, "samples": 10, "seconds": 1790.0, "stop_reason": stop,
+        "best_score": best,
+        "best_heldout_score": heldout,
+        "samples": 10,
+        "seconds": 1790.0,
+        "stop_reason": stop,
         "by_generator": {"mutate": {"samples": 10, "programs_evaluated": 9, "best_score": best}},
         "simplified": {"lines": 4, "n_params": 2},
     }
