@@ -21,12 +21,12 @@ SIGKILL: it may ignore other signals.
 
 What the child can still do, by design: read what it already holds open (nothing else: the
 filter refuses every open, read-only included, so whatever it needs must be imported or opened
-in the zygote before the fork); see the metadata of a path it names (stat, access); use the CPU and
+in the zygote before the fork); use the CPU and
 memory its rlimits allow, on one thread (the filter refuses threads); write to the descriptors
 it kept. Other processes running as the unprivileged uid (nobody, by default) share it with
 the child: pass a uid nothing else uses where that matters. Landlock would add nothing: it
 governs the files a process opens (the child opens none) and, in newer kernels, TCP ports,
-signals and abstract sockets (all refused), not the metadata that stays visible.
+signals and abstract sockets (all refused).
 
 Layers, in the order `confine()` applies them; when the kernel refuses one, the others still
 apply and `Confinement.warnings` says what is missing:

@@ -8,12 +8,20 @@ thread gets it (threads and children inherit it, and it cannot be removed):
 * kills the process when the system call's architecture is not the native one (i386
   `int 0x80` or AArch32 calls on a 64-bit kernel, whose numbers mean other calls) and, on
   x86_64, for x32-ABI numbers (bit 0x40000000 set, or any number above it);
-* answers ENOSYS to numbers above the newest call reviewed here (`listns`, 470), so a call
-  added by a future kernel is refused until someone reviews it (C libraries fall back on
-  ENOSYS);
-* answers ENOSYS to `openat2` (flags in a struct BPF cannot read), so glibc falls back to
-  `openat`, which is refused;
-* answers EPERM, so that the program sees an error and reports it, to:
+* allows the calls of `syscalls.ALLOWED` and nothing else: reading and writing descriptors the
+  child already holds (`read`, `write`, their vector and positioned forms, `lseek`, `close`,
+  `fstat`, `dup*`, `poll`/`select`), memory (`brk`, `mmap`, `munmap`, `mremap`, `mprotect`,
+  `madvise`, `futex`), clocks and sleeps, signals to itself (`rt_sig*`, `sigaltstack`,
+  `pause`, `restart_syscall`), its own ids, limits and CPU time, `getrandom`, `sched_yield`,
+  `exit`, `exit_group`; and, with their arguments checked, `fcntl` (no locks, leases, owners or
+  pipe sizes), `ioctl` (only TCGETS, FIONREAD, FIONBIO, FIOCLEX, FIONCLEX), `prlimit64` and
+  `sched_getaffinity` (reading its own only);
+* answers ENOSYS to every other call (as a kernel without it would: C libraries fall back),
+  among them every call a future kernel adds, `openat2` (glibc falls back to `openat`), new
+  descriptors (`pipe2`, `eventfd2`, `epoll_create1`, `timerfd_create`), timers
+  (`timer_create`, `setitimer`, `alarm`), `uname`, `sysinfo`, `capget`, `landlock_*`;
+* answers EPERM, so that the program sees an error and reports it, to the calls it names
+  (`syscalls.DENIED`), all of which would do harm:
 
   - the file system, reads included: `open` and `openat` with any flags (the child runs on
     what the zygote opened and imported before the fork, so a program that reached the real
@@ -22,7 +30,10 @@ thread gets it (threads and children inherit it, and it cannot be removed):
     `fgetxattr`, `getxattrat`, `listxattr`, `llistxattr`, `flistxattr`, `listxattrat` (data a
     file holds besides its contents); the names behind links and working directories,
     `readlink`, `readlinkat`, `chdir`, `fchdir` (/proc/<pid>/fd/N and cwd of every dumpable
-    process of the same uid name its open files and where it works); and writes: `creat`, `sync`, `syncfs`,
+    process of the same uid name its open files and where it works); metadata: `stat`,
+    `lstat`, `newfstatat`, `statx`, `access`, `faccessat`, `faccessat2`, `getdents`,
+    `getdents64`, `getcwd`, `statfs`, `fstatfs` (which of the user's paths exist, whose they
+    are, when they changed); and writes: `creat`, `sync`, `syncfs`,
     `truncate`, `ftruncate`, `fallocate`, `rename`, `renameat`, `renameat2`, `unlink`,
     `unlinkat`, `rmdir`, `mkdir`, `mkdirat`, `link`, `linkat`, `symlink`, `symlinkat`,
     `mknod`, `mknodat`, `chmod`, `fchmod`, `fchmodat`, `fchmodat2`, `chown`, `fchown`,
@@ -80,17 +91,11 @@ thread gets it (threads and children inherit it, and it cannot be removed):
   Calls that exist on one architecture only (`open`, `creat`, `fork`, `vfork`, ... on
   x86_64) are in that architecture's filter only.
 
-What stays allowed, and why: everything else the computation needs (mmap, munmap, mremap,
-brk, madvise, mprotect, futex, read/write/pread/pwrite/lseek/close/dup on descriptors it
-already has, pipe2, eventfd, epoll, poll, clock_gettime, nanosleep, getrandom, rt_sig*
-on itself, sched_yield, sched_getaffinity of itself, rseq, exit, exit_group; what it creates of
-these is bounded by the descriptor and pending-signal limits `colmo.sandbox.confine` sets);
-no threads: a numerical library that starts a thread pool in the child fails (OpenBLAS
-calls exit(), which then hangs until the deadline), so the worker runs with one thread per
-library (`OPENBLAS_NUM_THREADS=1`, ... in its environment); stat, statx, access (the
-metadata of a path it names, no contents, no names it did not know); mmap/mprotect with PROT_EXEC: a program that reaches native code can
-already call any libc function, so shellcode would gain nothing, and refusing executable
-memory breaks libffi closures and loaders; `landlock_*` (it can only restrict).
+No threads: a numerical library that starts a thread pool in the child fails (OpenBLAS calls
+exit(), which then hangs until the deadline), so the worker runs with one thread per library
+(`OPENBLAS_NUM_THREADS=1`, ... in its environment). mmap/mprotect with PROT_EXEC stay allowed: a
+program that reaches native code can already make any allowed call, so shellcode would gain
+nothing, and refusing executable memory breaks libffi closures.
 """
 
 from __future__ import annotations
@@ -227,18 +232,15 @@ def filter_program(machine: str) -> list[Instruction]:
             _jump(BPF_JGE_K, syscalls.X32_SYSCALL_BIT, 0, 1),
             _statement(BPF_RET_K, SECCOMP_RET_KILL_PROCESS),
         ]
-    program += [
-        _jump(BPF_JGE_K, syscalls.FIRST_UNREVIEWED_SYSCALL, 0, 1),
-        _statement(BPF_RET_K, _errno(errno.ENOSYS)),
-    ]
-    denied = [numbers[name] for group in syscalls.DENIED.values() for name in group if name in numbers]
-    program += _return_if_equal(denied, _errno(errno.EPERM))
-    program += _return_if_equal([numbers[name] for name in syscalls.UNSUPPORTED], _errno(errno.ENOSYS))
+    allowed = [numbers[name] for name in syscalls.ALLOWED_NAMES if name in numbers]
+    program += _return_if_equal(allowed, SECCOMP_RET_ALLOW)
     for name, check in argument_checks().items():
         if name in numbers:
             program.append(_jump(BPF_JEQ_K, numbers[name], 0, len(check)))
             program += check
-    program.append(_statement(BPF_RET_K, SECCOMP_RET_ALLOW))
+    denied = [numbers[name] for name in syscalls.DENIED_NAMES if name in numbers]
+    program += _return_if_equal(denied, _errno(errno.EPERM))
+    program.append(_statement(BPF_RET_K, _errno(errno.ENOSYS)))
     assert len(program) <= _BPF_MAXINSNS
     return program
 

@@ -1,6 +1,7 @@
 """The system-call data of the seccomp filter (`colmo.sandbox.seccomp`): each supported
-architecture's audit value and system-call numbers, the calls the filter denies, grouped by
-what they would let a program do, and the argument values it checks. Numbers come from the
+architecture's audit value and system-call numbers, the calls the filter allows (an allowlist:
+what a confined child needs to compute and reply, grouped by why), the calls it refuses by name
+(grouped by what they would let a program do), and the argument values it checks. Numbers come from the
 kernel's syscall tables (x86_64: arch/x86/entry/syscalls/syscall_64.tbl; aarch64: the generic
 table, include/uapi/asm-generic/unistd.h).
 """
@@ -9,8 +10,6 @@ from __future__ import annotations
 
 AUDIT_ARCH = {"x86_64": 0xC000003E, "aarch64": 0xC00000B7}
 X32_SYSCALL_BIT = 0x40000000
-# One past the newest system call reviewed for this filter (listns, 470, Linux 6.18).
-FIRST_UNREVIEWED_SYSCALL = 471
 
 # Numbers ≥ 424 are shared by all architectures.
 COMMON_NEW_SYSCALLS = {
@@ -63,6 +62,22 @@ SYSCALL_NUMBERS: dict[str, dict[str, int]] = {
         "sync": 162, "syncfs": 306, "fadvise64": 221, "io_setup": 206, "chdir": 80, "fchdir": 81,
         "readlink": 89, "readlinkat": 267, "getxattr": 191, "lgetxattr": 192, "fgetxattr": 193,
         "listxattr": 194, "llistxattr": 195, "flistxattr": 196,
+        # allowed
+        "read": 0, "write": 1, "close": 3, "fstat": 5, "poll": 7, "lseek": 8, "mmap": 9,
+        "mprotect": 10, "munmap": 11, "brk": 12, "rt_sigaction": 13, "rt_sigprocmask": 14,
+        "rt_sigreturn": 15, "pread64": 17, "pwrite64": 18, "readv": 19, "writev": 20,
+        "select": 23, "sched_yield": 24, "mremap": 25, "madvise": 28, "dup": 32, "dup2": 33,
+        "pause": 34, "nanosleep": 35, "getpid": 39, "exit": 60, "gettimeofday": 96,
+        "getrlimit": 97, "getrusage": 98, "times": 100, "getuid": 102, "getgid": 104,
+        "geteuid": 107, "getegid": 108, "getppid": 110, "getresuid": 118, "getresgid": 120,
+        "rt_sigpending": 127, "rt_sigtimedwait": 128, "rt_sigsuspend": 130, "sigaltstack": 131,
+        "gettid": 186, "time": 201, "futex": 202, "restart_syscall": 219, "clock_gettime": 228,
+        "clock_getres": 229, "clock_nanosleep": 230, "exit_group": 231, "pselect6": 270,
+        "ppoll": 271, "dup3": 292, "getrandom": 318,
+        # the file system's metadata, refused
+        "stat": 4, "lstat": 6, "access": 21, "getdents": 78, "getcwd": 79, "statfs": 137,
+        "fstatfs": 138, "getdents64": 217, "newfstatat": 262, "faccessat": 269, "statx": 332,
+        "faccessat2": 439,
         **COMMON_NEW_SYSCALLS,
     },
     "aarch64": {
@@ -98,11 +113,55 @@ SYSCALL_NUMBERS: dict[str, dict[str, int]] = {
         "process_vm_readv": 270, "process_vm_writev": 271, "kcmp": 272, "finit_module": 273,
         "sched_setattr": 274, "renameat2": 276, "seccomp": 277, "memfd_create": 279,
         "bpf": 280, "execveat": 281, "userfaultfd": 282, "kexec_file_load": 294,
+        # allowed
+        "dup": 23, "dup3": 24, "close": 57, "lseek": 62, "read": 63, "write": 64, "readv": 65,
+        "writev": 66, "pread64": 67, "pwrite64": 68, "pselect6": 72, "ppoll": 73, "fstat": 80,
+        "exit": 93, "exit_group": 94, "futex": 98, "nanosleep": 101, "clock_gettime": 113,
+        "clock_getres": 114, "clock_nanosleep": 115, "sched_yield": 124, "restart_syscall": 128,
+        "sigaltstack": 132, "rt_sigsuspend": 133, "rt_sigaction": 134, "rt_sigprocmask": 135,
+        "rt_sigpending": 136, "rt_sigtimedwait": 137, "rt_sigreturn": 139, "getresuid": 148,
+        "getresgid": 150, "times": 153, "getrlimit": 163, "getrusage": 165, "gettimeofday": 169,
+        "getpid": 172, "getppid": 173, "getuid": 174, "geteuid": 175, "getgid": 176,
+        "getegid": 177, "gettid": 178, "brk": 214, "munmap": 215, "mremap": 216, "mmap": 222,
+        "mprotect": 226, "madvise": 233, "getrandom": 278,
+        # the file system's metadata, refused
+        "getcwd": 17, "statfs": 43, "fstatfs": 44, "faccessat": 48, "getdents64": 61,
+        "newfstatat": 79, "statx": 291, "faccessat2": 439,
         **COMMON_NEW_SYSCALLS,
     },
 }  # fmt: skip
 
-# Refused outright with EPERM, grouped as in the module docstring.
+# Allowed, and nothing else: what a confined child needs to run Python and numpy on memory it
+# holds, and to write its reply down the pipe it kept. Found by tracing every call the children of
+# the sandbox tests make after the filter (`strace -f` over tests/test_sandbox.py,
+# test_episode_state.py, test_coverage.py, test_evaluation.py, test_hostile.py: brk, mmap,
+# munmap, mprotect, madvise, futex, getrandom, getppid, read, write, clock_nanosleep, pause,
+# exit_group), then completed with what the C library and the interpreter call on paths those
+# tests do not take (a realloc's mremap, a signal's return, a retried sleep). Calls that exist on
+# one architecture only (`poll`, `dup2`, `time`, ... on x86_64) are in that architecture's filter.
+ALLOWED: dict[str, tuple[str, ...]] = {
+    # The hot ones first: the filter compares them in this order.
+    "descriptors it holds": (
+        "read", "write", "readv", "writev", "pread64", "pwrite64", "lseek", "close", "fstat",
+        "dup", "dup2", "dup3", "poll", "ppoll", "select", "pselect6",
+    ),
+    "memory": ("futex", "brk", "mmap", "munmap", "mremap", "mprotect", "madvise"),
+    "time": ("clock_gettime", "clock_getres", "gettimeofday", "time", "nanosleep", "clock_nanosleep"),
+    "signals to itself": (
+        "rt_sigaction", "rt_sigprocmask", "rt_sigreturn", "sigaltstack", "rt_sigpending",
+        "rt_sigsuspend", "rt_sigtimedwait", "pause", "restart_syscall",
+    ),
+    # What it is and what it used: its own ids, limits and CPU time, randomness (Python's hash
+    # seed, numpy's default generator).
+    "itself": (
+        "getpid", "gettid", "getppid", "getuid", "geteuid", "getgid", "getegid", "getresuid",
+        "getresgid", "getrlimit", "getrusage", "times", "getrandom", "sched_yield",
+    ),
+    "exit": ("exit", "exit_group"),
+}  # fmt: skip
+
+# Refused with EPERM, so that the program sees the refusal and reports it, grouped as in the
+# module docstring. Every other call is refused with ENOSYS (as a kernel without it would).
 DENIED: dict[str, tuple[str, ...]] = {
     "file system writes": (
         "creat", "truncate", "ftruncate", "fallocate", "rename", "renameat", "renameat2",
@@ -124,6 +183,12 @@ DENIED: dict[str, tuple[str, ...]] = {
         "open", "openat", "fadvise64", "cachestat", "io_setup", "getxattr", "lgetxattr",
         "fgetxattr", "getxattrat", "listxattr", "llistxattr", "flistxattr", "listxattrat",
         "readlink", "readlinkat", "chdir", "fchdir",
+    ),
+    # Which paths exist, who owns them, when they changed, what a directory lists, where the
+    # process works: a program could probe the user's files and the coordinator's run directory.
+    "file system metadata": (
+        "stat", "lstat", "newfstatat", "statx", "access", "faccessat", "faccessat2", "getdents",
+        "getdents64", "getcwd", "statfs", "fstatfs",
     ),
     "networking": (
         "socket", "socketpair", "connect", "bind", "listen", "accept", "accept4", "sendto",
@@ -172,9 +237,8 @@ DENIED: dict[str, tuple[str, ...]] = {
     ),
 }  # fmt: skip
 
-# Its arguments live in a struct the filter cannot read: ENOSYS makes glibc fall back to
-# openat, which is refused.
-UNSUPPORTED = ("openat2",)
+ALLOWED_NAMES = tuple(name for group in ALLOWED.values() for name in group)
+DENIED_NAMES = tuple(name for group in DENIED.values() for name in group)
 
 DENIED_FCNTL_COMMANDS = (
     6,  # F_SETLK
