@@ -36,7 +36,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 
 from colmo.components import register_schemas, schema_names
 from colmo.config.schemas import CONFIG_MODULE
-from colmo.errors import EXIT_RUNTIME, EXIT_USAGE, ConfigError, RunError, one_line
+from colmo.errors import EXIT_INTERRUPTED, EXIT_RUNTIME, EXIT_USAGE, ConfigError, RunError, one_line
 
 
 def to_objects(cfg: DictConfig) -> Any:
@@ -219,6 +219,9 @@ def hydra_app(
                     hydra_main()
             except SystemExit as stop:
                 _exit_now(stop.code)
+            except KeyboardInterrupt:  # a Ctrl-C the app does not handle itself (or a second one)
+                print("colmo: interrupted", file=sys.stderr)
+                _exit_now(EXIT_INTERRUPTED)
             _exit_now(0)
 
         main.check_command_line = lambda argv: check_overrides(_parse(argv))

@@ -5,6 +5,8 @@
   `EXIT_USAGE` (2); `colmo.cli` does this for every Hydra app.
 - `RunError`: the run could not go on for a reason outside the user's input (a disk that is
   full, a generator that stopped answering); one line, exit `EXIT_RUNTIME` (1).
+- A Ctrl-C that an app does not turn into a clean stop: `colmo: interrupted`, exit
+  `EXIT_INTERRUPTED` (130).
 - `one_line(error)`: the first line of an error, with its cause when that says more.
 - `failure_reason(text)`: a program's failure reason as stored and logged: one line of
   printable characters, at most `MAX_REASON_CHARS` (programs choose their own exception
@@ -15,6 +17,7 @@ from __future__ import annotations
 
 EXIT_RUNTIME = 1
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command Ctrl-C ended
 MAX_REASON_CHARS = 500
 
 

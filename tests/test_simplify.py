@@ -13,6 +13,8 @@ from __future__ import annotations
 import ast
 import json
 import math
+import os
+import signal
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +94,8 @@ def test_dead_code_second_return_unused_assignment_and_literal_call_are_removed_
     code = '''
 import numpy as np
 import math
+import os
+import signal
 
 def helper(x):
     return x
@@ -243,6 +247,8 @@ def policy(obs):
 """,
     """
 import math
+import os
+import signal
 def policy(obs):
     try:
         v = 1.0 / obs[0]
@@ -711,3 +717,49 @@ def test_a_time_limit_ends_the_simplification_with_the_best_program_so_far(execu
     result = simplify_program(executor, train, heldout, code, GFOConfig(method="none", budget=1), max_seconds=2.0)
     assert result.size.nodes <= result.size_initial.nodes and result.scores.train >= result.scores_initial.train - 0.01 * abs(result.scores_initial.train)
     assert len(result.steps) <= 1  # at most the static pass: no round of deletions had the time
+
+
+def _simplifying(tmp_path, statements: int):
+    """`colmo-simplify` started on a long policy, its workers' temporary directories under
+    `tmp_path/tmp`; returns the process once it has begun simplifying."""
+    from conftest import start_colmo
+
+    (tmp_path / "tmp").mkdir()
+    policy_file = tmp_path / "policy.py"
+    policy_file.write_text(chained_assignments(statements))
+    process = start_colmo(
+        "colmo.simplify", f"policy_file={policy_file}", "task=pendulum", "task.episodes=2", "evaluation.episodes=2", "executor.workers=2",
+        cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmp_path / "tmp")},
+    )
+    for line in process.stderr:
+        if "simplifying with tolerance" in line:
+            return process
+    pytest.fail(f"colmo-simplify ended before simplifying: {process.communicate()}")
+
+
+def test_ctrl_c_stops_the_simplifier_with_the_simplification_so_far(tmp_path):
+    from conftest import last_json_line
+
+    process = _simplifying(tmp_path, 400)
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate(timeout=300)
+    assert process.returncode == 130, stderr
+    assert "interrupted: stopping with the simplification so far" in stderr and "Traceback" not in stderr
+    summary = last_json_line(stdout)
+    assert summary["interrupted"] is True and summary["score"] is not None
+    (written,) = tmp_path.glob("outputs/simplify/*/*/simplified_policy.py")
+    assert written.read_text().endswith(summary["code"] + "\n")
+    assert list((tmp_path / "tmp").iterdir()) == []  # the workers' directory is gone
+
+
+def test_a_second_ctrl_c_quits_the_simplifier_in_one_line(tmp_path):
+    process = _simplifying(tmp_path, 400)
+    process.send_signal(signal.SIGINT)
+    for line in process.stderr:  # signals of one kind do not queue: the second once the first is handled
+        if "interrupted: stopping" in line:
+            break
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=300)
+    assert process.returncode == 130, stderr
+    assert stderr.strip().splitlines()[-1] == "colmo: interrupted" and "Traceback" not in stderr
+    assert list((tmp_path / "tmp").iterdir()) == []

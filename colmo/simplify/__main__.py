@@ -8,12 +8,15 @@ before and after (AST nodes, lines, parameters); the last line of stdout is one 
 and says where. Before the first deletion it counts what each branch of the policy did over the
 training and held-out episodes (`colmo.coverage`) and tries the policy without the branches it
 never took. `simplify.tolerance` is the share of the training score a deletion may cost;
-`gfo=none` skips the final re-tuning.
+`gfo=none` skips the final re-tuning. Ctrl-C (or SIGTERM) stops it at its next step with the
+simplification so far, written and reported as above (`"interrupted": true`, exit 130); a second
+one quits.
 """
 
 from __future__ import annotations
 
 import logging
+import sys
 from dataclasses import replace
 from pathlib import Path
 from typing import Optional
@@ -22,9 +25,11 @@ from colmo import coverage
 from colmo.cli import hydra_app
 from colmo.config import SimplifyAppConfig
 from colmo.coverage import Pruned
+from colmo.errors import EXIT_INTERRUPTED
 from colmo.evaluation import Evaluator
 from colmo.extract import extract_policy
 from colmo.policy_tools import PolicySession, check_policy_file, policy_session, print_result, write_result
+from colmo.signals import stop_signals
 from colmo.simplify.greedy import SimplifyResult
 from colmo.simplify.sandboxed import simplify_program
 
@@ -62,11 +67,28 @@ def _untaken_branches(session: PolicySession, code: str, episodes: Evaluator) ->
     return coverage.prune(code, counted.coverage)
 
 
+class _Interruption:
+    """The first stop signal asks the simplifier to stop at its next step; the second quits."""
+
+    def __init__(self) -> None:
+        self.signals = 0
+
+    def __call__(self, signum: int) -> None:
+        self.signals += 1
+        if self.signals > 1:
+            raise KeyboardInterrupt
+        log.warning("interrupted: stopping with the simplification so far (again to quit now)")
+
+    def asked(self) -> bool:
+        return self.signals > 0
+
+
 @hydra_app("simplify", check=check_policy_file)
 def main(cfg: SimplifyAppConfig) -> None:
     """Delete dead code and each part that costs at most simplify.tolerance of the score, then re-tune."""
     code = extract_policy(Path(cfg.policy_file).expanduser().read_text(errors="replace"))
-    with policy_session(cfg) as session:
+    interruption = _Interruption()
+    with stop_signals(interruption), policy_session(cfg) as session:
         evaluator, heldout = session.evaluator, session.heldout(cfg.evaluation.episodes)
         log.info(
             "%s: simplifying with tolerance %g on %d training and %d held-out episodes, gfo=%s",
@@ -75,14 +97,14 @@ def main(cfg: SimplifyAppConfig) -> None:
         hint = _untaken_branches(session, code, replace(evaluator, seeds=evaluator.seeds + heldout.seeds))
         result = simplify_program(
             session.executor, evaluator, heldout, code, cfg.gfo, cfg.simplify.tolerance, cfg.seed, cfg.simplify.max_rounds, cfg.simplify.batch_size,
-            max_seconds=cfg.simplify.max_seconds, hint=hint,
+            stop=interruption.asked, max_seconds=cfg.simplify.max_seconds, hint=hint,
         )
 
     print(_report(result, len(evaluator.seeds), len(heldout.seeds)))
     summary = result.to_json() | {
         "task": cfg.task.name, "policy_file": cfg.policy_file, "tolerance": cfg.simplify.tolerance, "gfo": cfg.gfo.method,
         "episodes": len(evaluator.seeds), "heldout_episodes": len(heldout.seeds), "seed": cfg.seed,
-        "branches_never_taken": hint.branches if hint else 0,
+        "branches_never_taken": hint.branches if hint else 0, "interrupted": interruption.asked(),
     }
     header = (
         f"# simplified by colmo-simplify (tolerance {cfg.simplify.tolerance:g}, gfo={cfg.gfo.method}) from {cfg.policy_file}:\n"
@@ -92,6 +114,8 @@ def main(cfg: SimplifyAppConfig) -> None:
     )
     write_result(summary, "simplified_policy.py", header + result.code + "\n")
     print_result(summary)
+    if interruption.asked():
+        sys.exit(EXIT_INTERRUPTED)
 
 
 if __name__ == "__main__":
