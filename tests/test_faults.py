@@ -148,12 +148,15 @@ def test_a_full_disk_ends_the_search_cleanly_with_the_store_intact(tmp_path):
 def test_a_killed_search_keeps_what_was_generated_and_resume_evaluates_it(tmp_path, caplog):
     """SIGKILL while a batch is being tuned: its samples are in the store as `pending`, with the
     generator's output; the resumed run evaluates those outputs under their own numbers instead
-    of generating new ones."""
-    process = start(tmp_path, "search.max_samples=8", *TINY, *SLOW, start_new_session=True)
+    of generating new ones. Nor does the kill leave a worker's temporary directory behind."""
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    process = start(tmp_path, "search.max_samples=8", *TINY, *SLOW, start_new_session=True, env={**os.environ, "TMPDIR": str(temporary)})
     run_dir = run_dir_of(tmp_path)
     wait_for(lambda: being_tuned(run_dir), timeout=600, what="programs in tuning")
     os.killpg(process.pid, signal.SIGKILL)  # the coordinator and its sandbox workers
     process.communicate(timeout=60)
+    assert not any(temporary.glob("colmo-sandbox-*"))
     pending = {sample: raw for sample, status, raw in rows(run_dir, "sample, status, raw") if status == "pending"}
     assert pending
     with caplog.at_level(logging.INFO, logger="colmo.search"):

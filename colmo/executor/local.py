@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import shutil
-import tempfile
 from typing import Optional
 
 from colmo.config import ExecutorConfig
@@ -21,7 +19,6 @@ class LocalExecutor(Dispatcher):
     def __init__(self, workers: int, memory_mb: int = 4096, max_retries: int = 2):
         super().__init__(workers, max_retries)
         self.memory_mb = memory_mb
-        self.tmpdir = tempfile.mkdtemp(prefix="colmo-sandbox-")
         self._processes: list[Optional[SandboxProcess]] = [None] * workers
         self._start_dispatching()
 
@@ -35,7 +32,7 @@ class LocalExecutor(Dispatcher):
 
     def _open(self, slot: int) -> None:
         self._discard(slot)  # a worker that died by itself
-        self._processes[slot] = SandboxProcess(self.tmpdir, self.memory_mb)
+        self._processes[slot] = SandboxProcess(self.memory_mb)
 
     def _run(self, slot: int, request: EvalRequest) -> Evaluation:
         return self._processes[slot].evaluate(request)
@@ -48,10 +45,6 @@ class LocalExecutor(Dispatcher):
     def _is_open(self, slot: int) -> bool:
         process = self._processes[slot]
         return process is not None and process.alive()
-
-    def close(self, cancel: bool = False) -> None:
-        super().close(cancel)
-        shutil.rmtree(self.tmpdir, ignore_errors=True)
 
     def __enter__(self) -> "LocalExecutor":
         return self

@@ -2,7 +2,8 @@
 
 `SandboxProcess` starts the worker as a fresh interpreter with a clean environment (no API
 keys or tokens), in its own session and process group, its working directory a private
-temporary directory, with an address-space limit, no core dumps and a file size limit of 0
+temporary directory that is removed once the worker is ready (it writes nothing after, and a
+coordinator killed with SIGKILL leaves no directory behind), with an address-space limit, no core dumps and a file size limit of 0
 (no file writes; SIGXFSZ ignored so a write fails instead of killing it). `evaluate` sends one
 request and waits for the reply, a checked JSON `Evaluation` (never unpickled: even a worker
 taken over by a program cannot run code here). The worker enforces each request's time limit
@@ -17,10 +18,12 @@ import json
 import logging
 import os
 import resource
+import shutil
 import signal
 import socket
 import subprocess
 import sys
+import tempfile
 from multiprocessing.connection import Connection
 
 from colmo.evaluation import EvalRequest, Evaluation, WorkerLost
@@ -78,11 +81,19 @@ def _log_confinement(report: dict) -> None:
 class SandboxProcess:
     """One running sandbox worker. Not thread-safe: one dispatcher thread uses it."""
 
-    def __init__(self, tmpdir: str, memory_mb: int, startup_timeout_s: float = 120.0):
+    def __init__(self, memory_mb: int, startup_timeout_s: float = 120.0):
+        workdir = tempfile.mkdtemp(prefix="colmo-sandbox-")
+        try:
+            self._start(workdir, memory_mb, startup_timeout_s)
+        finally:
+            shutil.rmtree(workdir, ignore_errors=True)
+        _log_confinement(self.confinement)
+
+    def _start(self, workdir: str, memory_mb: int, startup_timeout_s: float) -> None:
         parent, child = socket.socketpair()
         self.process = subprocess.Popen(
             [sys.executable, "-m", "colmo.sandbox.worker", str(child.fileno()), str(os.getpid())],
-            pass_fds=(child.fileno(),), env=clean_environment(tmpdir), cwd=tmpdir,
+            pass_fds=(child.fileno(),), env=clean_environment(workdir), cwd=workdir,
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             start_new_session=True, preexec_fn=lambda: _apply_limits(memory_mb),
         )
@@ -96,7 +107,6 @@ class SandboxProcess:
             self.confinement = json.loads(ready.removeprefix(b"ready "))
         except (EOFError, OSError, ValueError):
             raise WorkerLost(f"a sandbox worker failed to start: {self.exit_reason()}") from None
-        _log_confinement(self.confinement)
 
     @property
     def pid(self) -> int:
