@@ -227,8 +227,9 @@ class TimeBudget:
         still in flight) over the batch's time in it, generation, tuning and waiting included, so
         that the samples that started beside it count as well as those that finished with it.
         The time left is the samples not started yet at that pace, or the end of those in flight,
-        whichever is later. Said in one line the first time and whenever it moves by more than
-        30%, with what the model calls take. `now`: `time.perf_counter()` unless given."""
+        whichever is later; where the time limit comes first, the line says the search's time
+        left and what the samples would take. Said in one line the first time and whenever the
+        end moves by more than 30%, with what the model calls take. `now`: `time.perf_counter()` unless given."""
         if self._searching is None or totals.samples - resumed_samples < 1:
             return
         now = time.perf_counter() if now is None else now
@@ -238,18 +239,19 @@ class TimeBudget:
         per_sample = in_system / (size + flying)
         left = max(max(max_samples - totals.samples - flying, 0) * per_sample, max((start + in_system - now for _, start in in_flight), default=0.0))
         self.estimated_seconds = now - self.start + left
-        if self._said is not None and abs(now + left - self._said[1]) <= _RESAY * max(self._said[1] - self._said[0], per_sample):
+        end, binds = now + left, "max_samples"
+        if self.max_seconds and end > self.deadline:
+            end = max(self.deadline, now)
+            binds = f"max_seconds={self.max_seconds:g} ({max_samples} samples would take {duration(left)})"
+        if self._said is not None and abs(end - self._said[1]) <= _RESAY * max(self._said[1] - self._said[0], per_sample):
             return
-        self._said = (now, now + left)
-        binds = "max_samples"
-        if self.max_seconds and now + left > self.deadline:
-            binds = f"max_seconds={self.max_seconds:g} (the search stops in {duration(max(self.deadline - now, 0.0))})"
+        self._said = (now, end)
         model = ""
         if totals.tokens_per_second:  # a language model: what its calls take
             model = f", model calls {totals.generator_busy * totals.seconds / totals.samples:.0f} s each at {totals.tokens_per_second:.1f} tokens/s"
         log.info(
             "estimated duration after %d samples: search %s more (%.1f s a sample%s); limit that binds: %s",
-            totals.samples, duration(left), per_sample, model, binds,
+            totals.samples, duration(end - now), per_sample, model, binds,
         )
 
     def _plan_finish(self) -> FinishPlan:
