@@ -1,10 +1,7 @@
-# colmo: the best policy of cheetah simplified: training score 229.46, held-out 213.77
+# colmo: the best policy of cheetah simplified: training score 175.86, held-out 158.14
 import numpy as np
 
 def policy(obs):
-    action = np.zeros(6) * (-0.336 * obs[12]) - 1.912 * obs[11]
-    action_b = np.zeros(6) + 0.1716 * (obs[16] + -7.43 * obs[2]) - 131.4 * obs[11]
-    if obs[12] > -3.025:
-        return 0.5637 * np.clip(action, 192.4 * obs[1] * obs[11], 74.67 * (0.1854 * obs[5] + 0.02488 * obs[15]) / (obs[11] - 0.5392 * np.arctan2(obs[14], obs[1]) * np.sign(np.arctan2(obs[4], obs[10])))) + 20.15 * (np.clip(action_b, 42.17 * obs[1] * obs[11], 111.7 * np.cos(obs[1]) * obs[11]) - 0.1901 * obs[7] / obs[8])
-    else:
-        return 1.048 * action
+    action = np.zeros(6) - (-2.944 * obs[14] + 1.159 * obs[15] - -2.457 - (np.sin(obs[6]) + 0.9223 * np.sign(obs[1])))
+    action_b = np.zeros(6) - (1.241 - (obs[6] + -0.08646 * np.sin(obs[3])))
+    return action if obs[9] > -0.1058 else action_b
