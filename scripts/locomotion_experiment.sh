@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Issue 34 part 3, exploration: why locomotion searches stall, one seed and 30 minutes a run
+# (search.max_seconds=1800, everything included), colmo's embedded mutation (llm=mutate), two
+# evaluation workers. Each variant changes one thing against the default:
+#   quadruped/default   the corrected task (upright start), GFO (1+1)-ES
+#   cheetah/cma         GFO CMA-ES instead of (1+1)-ES (cheetah/default is mixed-generation's mutate s0)
+#   cheetah/episodes20  20 training episodes instead of 10 (its winners lost 20-90 held-out)
+#   quadruped/cma       GFO CMA-ES
+# Each run is a one-job sweep into its own directory, so running this again keeps what finished
+# and resumes the rest (a resumed run's time limit is the whole run's).
+#
+#   scripts/locomotion_experiment.sh OUT [SEED]
+#   python scripts/mixed_summary.py OUT        the table (its comparison is with a `mutate` variant, if any)
+set -u
+out=$(mkdir -p "$1" && cd "$1" && pwd)
+seed=${2:-0}
+cd "$out"
+run() {  # task variant overrides...
+  local task=$1 variant=$2; shift 2
+  colmo -m "task=$task" "seed=$seed" llm=mutate search.max_seconds=1800 search.max_samples=1000000 search.progress=false \
+    "hydra.sweep.dir=$task/$variant/s$seed" "$@" || echo "run $task $variant s$seed exited $?"
+}
+run quadruped default
+run cheetah cma gfo=cma
+run cheetah episodes20 task.episodes=20
+run quadruped cma gfo=cma
