@@ -258,7 +258,9 @@ def finish(
             # What is being scored when it stops still ends: about two such measurements.
             step = time.monotonic()
             hint = coverage.prune(top[0].code, coverage.counts_of(best.coverage)) if best.coverage else None
-            best.simplified = _simplify(cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until - 2 * best_took, plan.reduced, hint)
+            best.simplified = _simplify(
+                cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until - 2 * best_took, plan.reduced, hint, observation_names,
+            )
             took["simplification"] = time.monotonic() - step
     best.readability = readability.report(top[0].code, best.coverage, best.simplified, best.misnamed)
     log.info("best policy's readability: %s", readability.describe(best.readability))
@@ -355,11 +357,11 @@ def _render(cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: S
 
 def _simplify(
     cfg: SearchConfig, executor: Executor, evaluator: Evaluator, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float,
-    short: bool = False, hint: Optional[Pruned] = None,
+    short: bool = False, hint: Optional[Pruned] = None, names: Sequence[str] = (),
 ) -> dict:
     """The best policy simplified into `simplified_policy.py`; its `to_json()` for the summary.
     `short`: one candidate per worker at a time, so the deadline is checked often; `hint`: the
-    program without the branches it never took, tried first."""
+    program without the branches it never took, tried first; `names`: the spec's observation names."""
     from colmo.simplify import simplify_program
 
     options = cfg.simplify
@@ -367,7 +369,7 @@ def _simplify(
     try:
         result = simplify_program(
             executor, evaluator, heldout, record.code, cfg.gfo, options.tolerance, cfg.seed, options.max_rounds,
-            batch_size, stop=lambda: _left(until) <= 0, max_seconds=options.max_seconds, hint=hint,
+            batch_size, stop=lambda: _left(until) <= 0, max_seconds=options.max_seconds, hint=hint, names=names,
         )
     except RunError as error:  # the best program fails where the simplifier measures it
         log.warning("best policy not simplified: %s", error)

@@ -11,13 +11,18 @@ entry (`x = obs[i]`, or unpacked: `a, b, c = obs`) whose name contradicts the sp
     is about θ; only "cos" says which one).
 Words are compared after a few synonyms are folded (`angle` and `theta`, `vel`, `omega`,
 `dot` and `velocity`, `pos` and `position`); a name made of words no spec name uses (`x`, `u`,
-`error`) says nothing and is never flagged. It reads code only; nothing runs.
+`error`) says nothing and is never flagged. It reads code only; nothing runs. `renamed` gives
+such variables the spec's names where that cannot change what the program does (the
+simplifier's last step).
 """
 
 from __future__ import annotations
 
 import ast
+import builtins
+import keyword
 import re
+from collections import Counter
 from typing import Sequence
 
 from colmo import astutil
@@ -71,9 +76,8 @@ def _is_entry(node: ast.AST, argument: str) -> int | None:
     return None
 
 
-def misnamed(code: str, names: Sequence[str], argument: str = "obs") -> list[str]:
-    """One line per variable of `code` whose name contradicts the spec's `names` for the
-    observation entry it holds (module docstring); [] where the spec names nothing."""
+def _contradicting(code: str, names: Sequence[str], argument: str) -> list[tuple[str, int]]:
+    """Each (variable, index) of `code` whose name contradicts the spec's `names` for the entry it holds."""
     if not names:
         return []
     vocabulary = [_words(name) for name in names]
@@ -86,5 +90,55 @@ def misnamed(code: str, names: Sequence[str], argument: str = "obs") -> list[str
         own = vocabulary[index]
         telling = own - set().union(*(v for i, v in enumerate(vocabulary) if i != index and v != own))
         if words and (words - own or (telling and not words & telling)):
-            found.append(f"`{variable}` holds {argument}[{index}], which the task calls {names[index]}")
+            found.append((variable, index))
     return found
+
+
+def misnamed(code: str, names: Sequence[str], argument: str = "obs") -> list[str]:
+    """One line per variable of `code` whose name contradicts the spec's `names` for the
+    observation entry it holds (module docstring); [] where the spec names nothing."""
+    return [f"`{variable}` holds {argument}[{index}], which the task calls {names[index]}" for variable, index in _contradicting(code, names, argument)]
+
+
+def renamed(code: str, names: Sequence[str], argument: str = "obs", function_name: str = "policy") -> tuple[str, list[str]]:
+    """`code` with each misnamed variable (`misnamed`) given the spec's name for the entry it
+    holds, and a line per renaming; only where that cannot change what the program does: the
+    variable is bound once, in the policy function, and used nowhere else (no argument, helper or
+    comprehension of that name), and the spec's name appears nowhere in the program."""
+    tree = astutil.parse(code)
+    function = astutil.function(tree, function_name)
+    if function is None:
+        return code, []
+    everywhere = _identifiers(tree)
+    done: list[str] = []
+    for variable, index in _contradicting(code, names, argument):
+        new = names[index]
+        stores = [n for n in ast.walk(function) if isinstance(n, ast.Name) and n.id == variable and not isinstance(n.ctx, ast.Load)]
+        if new in everywhere or keyword.iskeyword(new) or hasattr(builtins, new) or len(stores) != 1:
+            continue
+        inside = sum(1 for n in ast.walk(function) if isinstance(n, ast.Name) and n.id == variable)
+        if everywhere[variable] != inside:  # an argument, a helper's, a global's: not only this variable
+            continue
+        for node in ast.walk(function):
+            if isinstance(node, ast.Name) and node.id == variable:
+                node.id = new
+        everywhere[new] = everywhere.pop(variable)
+        done.append(f"renamed `{variable}` to `{new}`: it holds {argument}[{index}], which the task calls {new}")
+    return (ast.unparse(tree), done) if done else (code, [])
+
+
+def _identifiers(tree: ast.AST) -> Counter[str]:
+    """How often each identifier occurs in `tree`: names, arguments, definitions, imports, globals."""
+    counts: Counter[str] = Counter()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name):
+            counts[node.id] += 1
+        elif isinstance(node, ast.arg):
+            counts[node.arg] += 1
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            counts[node.name] += 1
+        elif isinstance(node, ast.alias):
+            counts[(node.asname or node.name).split(".")[0]] += 1
+        elif isinstance(node, (ast.Global, ast.Nonlocal)):
+            counts.update(node.names)
+    return counts

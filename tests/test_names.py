@@ -1,5 +1,6 @@
-"""Names that do not lie (issue 38 part 3): the prompt shows the observation's names as code, and a
-policy whose variables contradict them is flagged in its best_policy.py header."""
+"""Names that do not lie (issue 38 part 3): the prompt shows the observation's names as code, a
+policy whose variables contradict them is flagged in its best_policy.py header, and the
+simplified policy takes the spec's names where renaming cannot change what it does."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import dataclasses
 
 import pytest
 
-from colmo.names import bound_entries, misnamed
+from colmo.names import bound_entries, misnamed, renamed
 from colmo.record import Summary
 from colmo.specs import SpecError, load_spec
 from colmo.store import write_outputs
@@ -75,3 +76,46 @@ def test_best_policy_header_names_the_misleading_variables(tmp_path):
     write_outputs(summary, tmp_path)
     header = (tmp_path / "best_policy.py").read_text().splitlines()[:2]
     assert header[1] == "# misleading name: `theta` holds obs[0], which the task calls cos_theta"
+
+
+def test_a_misnamed_variable_takes_the_spec_s_name_and_does_the_same():
+    code = policy("theta = obs[0]", "velocity = obs[2]", "u = -2.0 * velocity if theta > 0.9 else np.sign(velocity)")
+    new, said = renamed(code, PENDULUM)
+    assert said == ["renamed `theta` to `cos_theta`: it holds obs[0], which the task calls cos_theta"]
+    assert "cos_theta = obs[0]" in new and "if cos_theta > 0.9" in new and "theta" not in new.replace("cos_theta", "")
+    namespace_old, namespace_new = {}, {}
+    exec(code, namespace_old)
+    exec(new, namespace_new)
+    for obs in ([1.0, 0.0, 0.5], [0.0, 1.0, -2.0]):
+        assert namespace_old["policy"](obs) == namespace_new["policy"](obs)
+
+
+@pytest.mark.parametrize("code", [
+    policy("theta = obs[0]", "theta = theta * 2.0"),  # bound twice: the name would hold something else later
+    policy("theta = obs[0]", "cos_theta = 1.0"),  # the spec's name is taken
+    "def helper(theta):\n    return theta\n\ndef policy(obs):\n    theta = obs[0]\n    return helper(theta)\n",  # a helper's argument
+    "theta = 0.5\n\ndef policy(obs):\n    global theta\n    theta = obs[0]\n    return theta\n",  # a global
+    policy("theta = obs[0]", "u = [theta for theta in obs]"),  # a comprehension's
+], ids=["rebound", "name taken", "helper argument", "global", "comprehension"])
+def test_a_name_is_left_where_renaming_could_change_the_program(code):
+    assert renamed(code, PENDULUM) == (code, [])
+
+
+def test_the_simplified_policy_takes_the_spec_s_names(tmp_path):
+    from conftest import last_json_line, run_colmo
+
+    policy_file = tmp_path / "policy.py"
+    policy_file.write_text(
+        "def policy(obs):\n    angle = obs[0]\n    sin_theta = obs[1]\n    omega = obs[2]\n"
+        "    if angle < 0.0:\n        return 1.0 if omega > 0.0 else -1.0\n    return -10.0 * sin_theta - 1.0 * omega\n"
+    )
+    result = run_colmo(
+        "colmo.simplify", f"policy_file={policy_file}", "task=pendulum", "task.episodes=2", "evaluation.episodes=2", "gfo=none",
+        "simplify.tolerance=0.0", "executor.workers=2", cwd=tmp_path,
+    )
+    assert result.returncode == 0, result.stderr
+    summary = last_json_line(result.stdout)
+    assert "cos_theta = obs[0]" in summary["code"] and "angle" not in summary["code"], summary["code"]
+    assert summary["steps"][-1]["description"] == "renamed `angle` to `cos_theta`: it holds obs[0], which the task calls cos_theta"
+    scores = [summary["score_initial"]] + [step["score"] for step in summary["steps"]]
+    assert scores[-1] == scores[-2] == summary["score"]  # renaming changes no score

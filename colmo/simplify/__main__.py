@@ -97,7 +97,7 @@ def main(cfg: SimplifyAppConfig) -> None:
         hint = _untaken_branches(session, code, replace(evaluator, seeds=evaluator.seeds + heldout.seeds))
         result = simplify_program(
             session.executor, evaluator, heldout, code, cfg.gfo, cfg.simplify.tolerance, cfg.seed, cfg.simplify.max_rounds, cfg.simplify.batch_size,
-            stop=interruption.asked, max_seconds=cfg.simplify.max_seconds, hint=hint,
+            stop=interruption.asked, max_seconds=cfg.simplify.max_seconds, hint=hint, names=session.spec.observation_names,
         )
 
     print(_report(result, len(evaluator.seeds), len(heldout.seeds)))

@@ -45,6 +45,7 @@ from typing import Any, Callable, Optional, Sequence
 
 from colmo import astutil
 from colmo.coverage import Pruned
+from colmo.names import renamed
 from colmo.program import DISPLAY_DIGITS, ProgramSize, instantiate, measure, parametrize, round_significant
 from colmo.record import finite_or_none
 from colmo.simplify.candidates import Candidate, deletion_candidates
@@ -202,11 +203,13 @@ def simplify(
     function_name: str = "policy",
     stop: Callable[[], bool] = lambda: False,
     hint: Optional[Pruned] = None,
+    names: Sequence[str] = (),
 ) -> SimplifyResult:
     """Simplify `code` (module docstring) and report what it cost. `stop()` is asked before each
     round, between a round's batches and before re-tuning; once it says so, the best program so far is the result.
     `hint`: the program without the branches it never took (`colmo.coverage.prune`), known
-    before any trial, tried first under the same rule.
+    before any trial, tried first under the same rule. `names`: the spec's observation names;
+    a variable whose name contradicts them is renamed last (`colmo.names.renamed`: nothing to score).
     Raises `ProgramFails` if the original program fails on the training episodes."""
     if not 0 <= tolerance < 1:
         raise ValueError(f"tolerance must be in [0, 1), got {tolerance}")
@@ -263,6 +266,9 @@ def simplify(
         if rule.accepts(readable_scores):
             current, scores = readable, readable_scores
             steps.append(Step(f"constants written to {DISPLAY_DIGITS} significant digits", current, scores, measure(current)))
+
+    current, renamings = renamed(current, names, function_name=function_name)
+    steps += [Step(description, current, scores, measure(current)) for description in renamings]
 
     return SimplifyResult(
         code_initial=code, code=current, scores_initial=scores_initial, scores=scores,

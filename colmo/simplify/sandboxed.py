@@ -103,6 +103,7 @@ def simplify_program(
     stop: Callable[[], bool] = lambda: False,
     max_seconds: Optional[float] = None,
     hint: Optional[Pruned] = None,
+    names: Sequence[str] = (),
 ) -> SimplifyResult:
     """Simplify a policy program of a task: dead code out, constants folded, deletions that cost
     at most `tolerance` of the training score (and do not widen the held-out gap by more), and
@@ -114,7 +115,8 @@ def simplify_program(
     a program as the intake returns it (`colmo.extract.extract_policy`). `batch_size` is the
     number of candidates per executor call (None: `BATCH_PER_WORKER` per worker); `max_rounds`
     `stop()` (a search's deadline) and `max_seconds` (from now) cut the greedy search short,
-    keeping the best program so far; `hint` is tried first (`colmo.simplify.greedy.simplify`).
+    keeping the best program so far; `hint` is tried first and variables that contradict the
+    spec's observation `names` are renamed last (`colmo.simplify.greedy.simplify`).
 
     Its callers: the finish of a search, on its best program before the executor closes, with
     `stop` at the finish's deadline (`colmo.finish`), and `colmo-simplify` on a policy file
@@ -130,6 +132,6 @@ def simplify_program(
     retune = gfo_retune(executor, train_evaluator, gfo_cfg, seed, stop) if tunes_constants(gfo_cfg) else None
     batch_size = batch_size or BATCH_PER_WORKER * executor.n_workers
     try:
-        return simplify(code, Scoring(train, heldout), retune, tolerance, max_rounds, batch_size, stop=stop, hint=hint)
+        return simplify(code, Scoring(train, heldout), retune, tolerance, max_rounds, batch_size, stop=stop, hint=hint, names=names)
     except ProgramFails:
         raise RunError(f"the policy fails on the training episodes: {train.failures.get(code, 'no score')}") from None
