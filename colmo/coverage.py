@@ -6,7 +6,11 @@ value the observation never takes. Coverage measures what each branch did:
     tested, and how many of those it was true;
   * `np.clip` (and an array's `.clip`): how many values it returned, and how many of them it
     raised or lowered (saturation: all of them, and the clip is a constant in disguise);
-  * `np.where(condition, a, b)`: how many values it chose, and for how many the condition held.
+  * `np.where(condition, a, b)`: how many values it chose, and for how many the condition held;
+  * a division (`/`, `//`, `%`) by something that is not a constant: how many values it gave,
+    for how many the divisor was 0, and how many other results were not finite (a term that
+    divides by a velocity that is 0 at every reset reads as physics and returns inf or nan).
+    `x /= y` is not counted (rewriting it would change what it does to an array in place).
 
 `instrument` rewrites a checked program's tree so that each such site reports to a `Probe`
 (the names it calls start with `__`, which the static check refuses in a program, so the
@@ -24,18 +28,22 @@ readable code and its parametrized skeleton, so the counts of one fit the text o
 from __future__ import annotations
 
 import ast
+import operator
 from dataclasses import dataclass
 from typing import Any, Callable, NamedTuple, Optional, Sequence
 
 import numpy as np
 
 from colmo import astutil
+from colmo.program import PARAMS_NAME
 
-BRANCH, CALL = "__colmo_branch__", "__colmo_call__"
+BRANCH, CALL, DIVIDE = "__colmo_branch__", "__colmo_call__", "__colmo_divide__"
 CONDITION_KINDS = ("if", "while", "conditional")
 CALL_KINDS = ("clip", "where")
+_DIVISIONS = {ast.Div: operator.truediv, ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod}
 MAX_SITES = 100_000  # far more than a program under the intake's node limit can hold
-Counts = tuple[int, int, int]  # tests (or values), then true (or raised by a clip), then lowered by a clip
+# Tests (or values); then true, raised by a clip, or a zero divisor; then lowered by a clip, or not finite.
+Counts = tuple[int, int, int]
 
 
 @dataclass(frozen=True)
@@ -50,11 +58,15 @@ class Site:
 class _Sites(ast.NodeTransformer):
     """Finds the sites in walk order; with `rewrite`, routes each through the probe."""
 
-    def __init__(self, rewrite: bool):
+    def __init__(self, rewrite: bool, tree: ast.Module):
         self.rewrite = rewrite
         self.found: list[Site] = []
-        self.nodes: list[ast.AST] = []  # the node of each site: the If, While, IfExp or Call
+        self.nodes: list[ast.AST] = []  # the node of each site: the If, While, IfExp, Call or BinOp
         self.statement_line = 0
+        # A divisor made of constants, tuned parameters and module attributes (`2 * np.pi`) is no site.
+        self.constant_names = {PARAMS_NAME} | {
+            (alias.asname or alias.name).split(".")[0] for node in ast.walk(tree) if isinstance(node, (ast.Import, ast.ImportFrom)) for alias in node.names
+        }
 
     def visit(self, node: ast.AST) -> Any:
         if not isinstance(node, ast.stmt):
@@ -98,14 +110,28 @@ class _Sites(ast.NodeTransformer):
         return ast.Call(ast.Name(CALL, ast.Load()), [ast.Constant(index), ast.Constant(name), node.func, *node.args], node.keywords)
 
 
+    def visit_BinOp(self, node: ast.BinOp) -> ast.AST:
+        if type(node.op) not in _DIVISIONS or self._constant(node.right):
+            return self.generic_visit(node)
+        index = self._site("division", node, node)
+        self.generic_visit(node)
+        if not self.rewrite:
+            return node
+        return ast.Call(ast.Name(DIVIDE, ast.Load()), [ast.Constant(index), ast.Constant(type(node.op).__name__), node.left, node.right], [])
+
+    def _constant(self, node: ast.AST) -> bool:
+        return not any(isinstance(n, ast.Call) or (isinstance(n, ast.Name) and n.id not in self.constant_names) for n in ast.walk(node))
+
+
 def _short(text: str, limit: int = 60) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def sites(code: str) -> list[Site]:
     """The sites of a program's text, in the order the probe numbers them."""
-    visitor = _Sites(rewrite=False)
-    visitor.visit(astutil.parse(code))
+    tree = astutil.parse(code)
+    visitor = _Sites(rewrite=False, tree=tree)
+    visitor.visit(tree)
     return visitor.found
 
 
@@ -118,7 +144,7 @@ def same_sites(code: str, skeleton: str) -> bool:
 def instrument(tree: ast.Module) -> int:
     """Route every site of `tree` (checked, about to be compiled) through the probe, in place;
     the number of sites."""
-    visitor = _Sites(rewrite=True)
+    visitor = _Sites(rewrite=True, tree=tree)
     visitor.visit(tree)
     ast.fix_missing_locations(tree)
     return len(visitor.found)
@@ -132,7 +158,7 @@ class Probe:
         self.counts = [[0, 0, 0] for _ in range(size)]
 
     def names(self) -> dict[str, Callable[..., Any]]:
-        return {BRANCH: self.branch, CALL: self.call}
+        return {BRANCH: self.branch, CALL: self.call, DIVIDE: self.divide}
 
     def branch(self, index: int, condition: object) -> bool:
         value = bool(condition)  # exactly what `if` does with it, exceptions included
@@ -146,6 +172,19 @@ class Probe:
         try:
             self._count(self.counts[index], kind, function, args, kwargs, result)
         except Exception:  # a call the counts cannot read (a program's own `clip`): its result stands
+            pass
+        return result
+
+    def divide(self, index: int, operation: str, left: Any, right: Any) -> Any:
+        result = _DIVISIONS[getattr(ast, operation)](left, right)  # exactly the program's operation, errors included
+        try:
+            values = np.asarray(result, dtype=float)
+            zero = np.broadcast_to(np.asarray(right, dtype=float) == 0, values.shape)
+            counts = self.counts[index]
+            counts[0] += values.size
+            counts[1] += _true(zero)
+            counts[2] += _true(~np.isfinite(values) & ~zero)
+        except Exception:  # values the counts cannot read (not numbers): the result stands
             pass
         return result
 
@@ -226,7 +265,7 @@ def prune(code: str, counts: Sequence[Counts]) -> Optional[Pruned]:
     nothing was decided so, or the counts do not fit the code. What the episodes did not reach
     stays: the simplifier removes what it can by trial."""
     tree = astutil.parse(code)
-    visitor = _Sites(rewrite=False)
+    visitor = _Sites(rewrite=False, tree=tree)
     visitor.visit(tree)
     if len(visitor.found) != len(counts):
         return None
@@ -263,6 +302,9 @@ def describe(site: Site, counts: Counts) -> str:
     head = f"`{site.text}`"
     if not tests:
         return f"{head}: never reached"
+    if site.kind == "division":
+        zero = f"divisor 0 for {_percent(first, tests)} of {tests:,} values" if first else f"divisor never 0 in {tests:,} values"
+        return f"{head}: {zero}" + (f", {_percent(second, tests)} other results not finite" if second else "")
     if site.kind == "where":
         return f"{head}: condition true for {_percent(first, tests)} of {tests:,} values"
     verdict = ": always at a limit" if first + second == tests else ""

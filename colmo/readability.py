@@ -3,7 +3,8 @@
 Beside its scores: the policy's size (lines, parameters, AST nodes) as the search found it and
 as the simplifier left it; its branches (`if`, `while` and conditional expressions) and how many
 were never taken or always taken over the training and held-out episodes (`colmo.coverage`);
-its clips that returned a limit for every value (constants in disguise); its variables whose names
+its clips that returned a limit for every value (constants in disguise); its divisions whose
+divisor was 0 for some value (a term that is inf or nan there); its variables whose names
 contradict the task's (`colmo.names`); and what the simplifier removed, step by step. `report`
 makes it from what the finish measured; it is `summary.json`'s `readability`, logged to MLflow as
 `readability_*` metrics and shown per run by `colmo-report`.
@@ -17,7 +18,10 @@ from colmo.coverage import CONDITION_KINDS
 from colmo.program import measure
 
 # The report's numbers, as the metrics a tracker logs (`readability_<name>`) and colmo-report reads.
-METRICS = ("lines", "parameters", "branches", "branches_never_taken", "clips_at_a_limit", "misleading_names", "simplified_lines", "simplified_parameters")
+METRICS = (
+    "lines", "parameters", "branches", "branches_never_taken", "clips_at_a_limit", "divisions_by_zero", "misleading_names",
+    "simplified_lines", "simplified_parameters",
+)
 
 
 def report(code: str, coverage: dict[str, Any], simplified: dict[str, Any], misnamed: Sequence[str]) -> dict[str, Any]:
@@ -28,12 +32,14 @@ def report(code: str, coverage: dict[str, Any], simplified: dict[str, Any], misn
     sites = coverage.get("sites")
     conditions = [site["counts"] for site in sites or () if site["kind"] in CONDITION_KINDS]
     clips = [site["counts"] for site in sites or () if site["kind"] == "clip"]
+    divisions = [site["counts"] for site in sites or () if site["kind"] == "division"]
     done = "score" in simplified  # a failed simplification says only why
     return {
         "lines": size.lines, "parameters": size.params, "nodes": size.nodes,
         "branches": len(conditions) if sites is not None else None,
         "branches_never_taken": sum(1 for tests, true, _ in conditions if tests and true in (0, tests)) if sites is not None else None,
         "clips_at_a_limit": sum(1 for values, raised, lowered in clips if values and raised + lowered == values) if sites is not None else None,
+        "divisions_by_zero": sum(1 for _, zero, _ in divisions if zero) if sites is not None else None,
         "misleading_names": len(misnamed),
         "simplified_lines": simplified.get("lines") if done else None,
         "simplified_parameters": simplified.get("n_params") if done else None,
@@ -50,6 +56,8 @@ def describe(readability: dict[str, Any]) -> Optional[str]:
         parts.append(f"{readability['branches_never_taken']} of {readability['branches']} branches decided the same way at every test")
         if readability["clips_at_a_limit"]:
             parts.append(f"{readability['clips_at_a_limit']} clip(s) returning a limit for every value")
+        if readability.get("divisions_by_zero"):  # a report from before divisions were counted has none
+            parts.append(f"{readability['divisions_by_zero']} division(s) by zero")
     parts.append(f"{readability['misleading_names']} misleading name(s)")
     if readability["simplified_lines"] is not None:
         parts.append(f"simplified: {readability['simplified_lines']} lines, {readability['simplified_parameters']} parameters")

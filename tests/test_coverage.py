@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import ast
 import json
+import re
 
 import numpy as np
 import pytest
@@ -200,3 +201,37 @@ def test_the_readability_report_counts_what_the_finish_measured():
     )
     nothing = report(DEAD_BRANCH, {}, {"failure": "the policy fails"}, [])
     assert nothing["branches"] is None and nothing["simplified_lines"] is None and nothing["removed"] == []
+
+
+DIVIDES = """import numpy as np
+
+
+def policy(obs):
+    cos_theta, sin_theta, omega = obs
+    gain = 2.0 / (2 * np.pi)
+    damping = sin_theta / omega
+    return np.clip(gain * sin_theta - damping, -1.0, 1.0)
+"""
+
+
+def test_a_division_by_a_velocity_that_is_zero_at_reset_is_counted():
+    """Issue 38: `x / omega` reads as physics and is inf at every reset (the pendulum starts at
+    rest). A divisor of constants (`2 * np.pi`) is no site."""
+    from colmo.executor import LocalExecutor
+    from colmo.heldout import branch_counts, task_evaluator
+    from colmo.readability import describe, report
+
+    assert [(s.kind, s.text) for s in coverage.sites(DIVIDES)] == [("division", "sin_theta / omega"), ("clip", "np.clip(gain * sin_theta - damping, -1.0, 1.0)")]
+    cfg = compose("optimize", "task=pendulum", "task.episodes=2", "policy_file=unused.py")
+    program = parametrize(DIVIDES)
+    with LocalExecutor(2) as executor:
+        _, evaluator = task_evaluator(cfg.task, cfg.executor, executor, seed=0)
+        counted = branch_counts(executor, evaluator, program.skeleton, program.values)
+        [fast] = CandidateEvaluator(executor, evaluator, program.skeleton, 2).fast([program.values])
+    assert counted.failure is None and counted.returns == fast.returns  # counting changes no return
+    (values, zero, not_finite), _ = counted.coverage
+    assert values == 2 * 1000 and 2 <= zero < values and not_finite == 0  # at least each episode's first step
+    text = coverage.annotate(DIVIDES, counted.coverage)
+    assert re.search(r"    # coverage: `sin_theta / omega`: divisor 0 for [0-9.]+% of 2,000 values\n    damping = sin_theta / omega\n", text), text
+    readable = report(DIVIDES, coverage.summary(DIVIDES, counted.coverage, 2), {}, [])
+    assert readable["divisions_by_zero"] == 1 and "1 division(s) by zero" in describe(readable)
