@@ -292,6 +292,8 @@ CORPUS = {
         f"lambda self: {FORGED_REPLIES['10**400 control steps']!r}.encode())\n" + NOTHING, True, "fast", 1, "program: malformed reply: ",
     ),
     "pre-sent actions": (PRESEND + NOTHING, True, "referee", 5, "timeout: "),
+    "bytes of an object array": (policy_doing("bytes(np.array([None, obs[0]]))"), False, "fast", 1, "exception: TypeError: bytes() of an array of objects is refused"),
+    "whether ~/.netrc exists": (libc_call("libc.access('{netrc}'.encode(), 0)"), True, "fast", 1, "exception: SystemExit: 1"),  # EPERM, not ENOENT or 0
     "ioctl FS_IOC_SETFLAGS": (libc_call("libc.ioctl(0, 0x40086602, buffer)"), True, "fast", 1, "exception: SystemExit: 1"),
     "ioctl FS_IOC_SETVERSION": (libc_call("libc.ioctl(0, 0x40087602, buffer)"), True, "fast", 1, "exception: SystemExit: 1"),
     "~/.netrc with the real open": (policy_doing("data = sys.modules['builtins'].open('{netrc}').read()", "import os, sys"), True, "fast", 1, REFUSED),
