@@ -236,7 +236,7 @@ def _shell_completion(hydra_main: Callable[[], None], overrides: list[str]) -> N
     picks) and, unless the line typed so far picks an option of Hydra's own groups
     (`hydra/launcher=joblib`, which installed plugins provide), with Hydra's core plugins only:
     Hydra imports every installed plugin before it answers, and the Optuna sweeper's imports of
-    MLflow and Optuna alone took 1.3 s of CPU per Tab."""
+    MLflow and Optuna alone cost over a second per Tab."""
     if not any(override.startswith("query=") for override in overrides):
         hydra_main()
         return
@@ -253,9 +253,9 @@ def _shell_completion(hydra_main: Callable[[], None], overrides: list[str]) -> N
 
 def _exit_now(code: Any) -> NoReturn:
     """End the process once an app has run: the exit handlers run (logging, MLflow, thread
-    pools), the interpreter's teardown does not. Tearing down the ~2700 modules a search
-    imports (Nevergrad brings pandas, pyarrow, scikit-learn) took 5-35 s on 2 loaded cores,
-    past `search.max_seconds`; everything colmo writes is closed by then.
+    pools), the interpreter's teardown does not. Tearing down the thousands of modules a search
+    imports (Nevergrad brings pandas, pyarrow, scikit-learn) can take tens of seconds on a loaded
+    machine, past `search.max_seconds`; everything colmo writes is closed by then.
 
     The exit is the interpreter's own up to the teardown, in its order: first the threading
     module's shutdown (its exit hooks, which stop thread and process pools such as joblib's

@@ -53,7 +53,7 @@ log = logging.getLogger("colmo.search")
 SAFETY = 1.5  # a loaded machine runs the finish this much slower than the calibration measured
 FINISH_SHARE = 0.4  # of a time limit, at most, for the finish when the full work does not fit
 # The plot and ffmpeg's start (matplotlib's import and the GL probe are warmed up in a thread
-# during the held-out scores): the whole render step, video included, took 4-5 s on 2 loaded cores.
+# during the held-out scores), beside the video's frames.
 _RENDER_FIXED_S = 5.0
 _VIDEO_S = 20.0  # seconds of frames for a full-size video at its full frame rate, at most
 _VIDEO_MIN_S = 2.0  # seconds of frames for a small, short video

@@ -16,8 +16,8 @@ def dm_control_model(name: str) -> mujoco.MjModel:
     The files are read from the installed dm_control package instead of through
     `dm_control.suite`, whose import loads every suite domain and probes for a renderer. Each
     name is compiled once per process and copied (`mj_copyModel`, the same model): a sandbox
-    worker builds one environment per episode of a lockstep batch, and compiling took 25 times
-    as long as copying.
+    worker builds one environment per episode of a lockstep batch, and compiling costs many
+    times what copying does.
     """
     return copy.copy(_compiled(name))
 

@@ -33,8 +33,8 @@ PLOT_FILE, VIDEO_FILE = "episode.png", "episode.mp4"
 def warm_up() -> None:
     """Import what drawing needs (matplotlib, imageio-ffmpeg) and find the OpenGL backend (a
     probe in a fresh interpreter), so that a render that follows starts at once: a search runs
-    this in a thread while its last programs are scored. Those took 15-25 s of a 35 s render on
-    2 loaded cores. Never raises; a missing piece is found again, and said, by the render."""
+    this in a thread while its last programs are scored (on a loaded machine they are most of a
+    render's time). Never raises; a missing piece is found again, and said, by the render."""
     try:
         import matplotlib.backends.backend_agg  # noqa: F401
         import matplotlib.figure  # noqa: F401
