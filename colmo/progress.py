@@ -4,7 +4,8 @@ On a terminal: a live display on stderr, redrawn twice a second from the search'
 it moves with every evaluation, not every batch: model calls (samples, duplicates and their
 regenerations included) and the programs evaluated of them, evaluations and evaluations/s,
 control steps, the best training score, generator and evaluator busy (with how long the model's
-call in flight has run, from its first second), and the time left
+call in flight has run, from its first second, and the tokens it has written where the generator
+tells: the in-process llama.cpp model), and the time left
 against the limit that binds (samples, seconds, or a target score), from the first seconds on
 (the search's own estimate: the starter's calibration until samples settle, then each batch's). Log lines print above it
 (rich's logging handler on the display's console), never into it. Without a terminal: the
@@ -53,6 +54,7 @@ class Snapshot:
     estimated_seconds: Optional[float] = None  # when the search ends by max_samples (`TimeBudget.estimated_seconds`)
     resumed_samples: int = 0  # model calls an earlier process of a resumed run settled: not in this one's rate
     call_seconds: Optional[float] = None  # how long the generator's call in flight has run (None: no call in flight)
+    call_tokens: Optional[int] = None  # what that call has generated so far (None: its generator does not say; 0: reading the prompt)
 
     @property
     def evaluations_per_second(self) -> float:
@@ -104,7 +106,10 @@ class Snapshot:
         return f"best {self._best()} | {self.evaluations_per_second:.1f} evals/s | steps {self.steps:,}"
 
     def _busy(self) -> str:
-        calling = f" (call {duration(self.call_seconds)})" if self.call_seconds is not None and self.call_seconds >= 1 else ""
+        calling = ""
+        if self.call_seconds is not None and self.call_seconds >= 1:
+            tokens = "" if self.call_tokens is None else ", reading the prompt" if not self.call_tokens else f", {self.call_tokens:,} tokens"
+            calling = f" (call {duration(self.call_seconds)}{tokens})"
         return f"generator busy {self.generator_busy:.0%}{calling} | evaluators busy {self.evaluator_busy:.0%}"
 
     def line(self) -> str:
@@ -128,7 +133,7 @@ def snapshot(search: "Search") -> Snapshot:
         generator_busy=totals.generator_busy, evaluator_busy=totals.evaluator_busy,
         max_seconds=search.budget.limit_seconds, stop_at_score=limits.stop_at_score,
         estimated_seconds=search.budget.estimated_seconds, resumed_samples=search.resumed_samples,
-        call_seconds=search.sampler.call_seconds(),
+        call_seconds=search.sampler.call_seconds(), call_tokens=search.sampler.call_tokens(),
     )
 
 

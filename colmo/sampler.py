@@ -42,6 +42,7 @@ class Sampler:
         self.probe: Optional[ProgramProbe] = None  # what mutation asks whether a child runs
         self.failure = ""  # "generator failed: ...", once one has
         self.calling_since: Optional[float] = None  # when the generator's call in flight began (`time.perf_counter()`)
+        self.calling: Optional[Generator] = None  # the generator of that call
         self.thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
 
     def needs_evaluator(self) -> bool:
@@ -87,7 +88,7 @@ class Sampler:
     def _generated(self, generator: Generator, prompt: Prompt, n: int, abandon: Callable[[int], bool]) -> Optional[list[Generation]]:
         if generator is self.filler:  # it answers at once, in the search's thread
             return generator.generate(prompt, n)
-        self.calling_since = time.perf_counter()
+        self.calling_since, self.calling = time.perf_counter(), generator
         generating = self.thread.submit(generator.generate, prompt, n)
         try:
             while not generating.done():
@@ -102,12 +103,17 @@ class Sampler:
             log.error("%s", self.failure)
             return None
         finally:
-            self.calling_since = None
+            self.calling_since = self.calling = None
 
     def call_seconds(self) -> Optional[float]:
         """How long the generator's call in flight has run; None when none is."""
         since = self.calling_since
         return None if since is None else time.perf_counter() - since
+
+    def call_tokens(self) -> Optional[int]:
+        """The tokens the call in flight has generated so far, where its generator tells (`Generator.tokens_so_far`)."""
+        calling = self.calling
+        return None if calling is None else calling.tokens_so_far()
 
     def stop(self) -> None:
         """Abandon the call in flight."""

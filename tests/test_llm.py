@@ -9,6 +9,7 @@ except in CI (`CI=true`), where that is a failure.
 
 from __future__ import annotations
 
+import concurrent.futures
 import json
 import os
 import socket
@@ -21,7 +22,7 @@ import urllib.request
 from pathlib import Path
 
 import pytest
-from conftest import run_colmo, unavailable
+from conftest import compose, run_colmo, unavailable
 
 pytestmark = pytest.mark.llm
 
@@ -71,6 +72,34 @@ def check_written_by_the_model(rows: list[dict], generator: str, min_samples: in
     assert all(row["raw"].strip() and row["raw"].strip() not in shown for row in written)
     statuses = [row["status"] for row in written]
     assert statuses.count("evaluated") >= min_evaluated, [(row["status"], row["raw"]) for row in written]
+
+
+def test_the_in_process_model_says_how_many_tokens_its_call_has_written(model):
+    """What the display shows while a call runs (`Generator.tokens_so_far`): 0 while it reads
+    the prompt, then its tokens as they come; None between calls."""
+    from colmo.database import ProgramDatabase, StoredProgram
+    from colmo.generate import make_generator
+    from colmo.prompt import build_prompt
+
+    cfg = compose("search", "llm=llamacpp", f"llm.model_path={model}", "llm.max_tokens=48")
+    generator = make_generator(cfg.llm, seed=0, probe=lambda code: True)
+    database = ProgramDatabase(cfg.database, StoredProgram("starter", "def policy(obs):\n    return 0.0\n", 1.0, 0, 0), seed=0)
+    seen: list[int] = []
+    try:
+        assert generator.tokens_so_far() is None
+        with concurrent.futures.ThreadPoolExecutor(1) as thread:
+            call = thread.submit(generator.generate, build_prompt("Swing the pole up.", database.select()), 1)
+            while not call.done():
+                tokens = generator.tokens_so_far()
+                if tokens is not None:
+                    seen.append(tokens)
+                time.sleep(0.01)
+            [generation] = call.result()
+        assert generator.tokens_so_far() is None
+    finally:
+        generator.close()
+    assert seen == sorted(seen) and seen[-1] > 0, seen[-5:]  # it counts up while the call runs
+    assert seen[-1] <= generation.completion_tokens + 1
 
 
 def test_llamacpp_search_with_a_real_model(model, tmp_path):

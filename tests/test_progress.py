@@ -108,6 +108,8 @@ def test_the_models_call_in_flight_shows_from_its_first_second():
     assert "generator busy 25% (call 1m03s) | evaluators busy 93%" in state(call_seconds=63.4).line()
     assert "generator busy 25% | evaluators" in state(call_seconds=0.2).line()  # mutate answers at once: no flicker
     assert "(call" not in state().line()
+    assert "generator busy 25% (call 1m03s, 212 tokens) |" in state(call_seconds=63.4, call_tokens=212).line()
+    assert "(call 2m00s, reading the prompt) |" in state(call_seconds=120.0, call_tokens=0).line()
 
 
 def fake_search(max_samples: int = 10, progress_every_s: float = 0.05) -> SimpleNamespace:
@@ -120,7 +122,7 @@ def fake_search(max_samples: int = 10, progress_every_s: float = 0.05) -> Simple
         totals=lambda: counters.totals(Elapsed(10.0, 0.5, 1.0), 2),
         budget=SimpleNamespace(limit_seconds=0.0, estimated_seconds=None, elapsed=lambda: 10.0),
         executor=executor, in_flight_samples=2, resumed_samples=0, database=None, cfg=SimpleNamespace(search=limits),
-        sampler=SimpleNamespace(call_seconds=lambda: None),
+        sampler=SimpleNamespace(call_seconds=lambda: None, call_tokens=lambda: None),
     )
 
 

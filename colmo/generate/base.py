@@ -101,6 +101,12 @@ class Generator(abc.ABC):
         """Abandon the generation in flight, where the generator can (the search is stopping);
         `generate` may then return early, and its result is discarded."""
 
+    def tokens_so_far(self) -> Optional[int]:
+        """Tokens the call in flight has generated so far, where the generator can tell (0: it is
+        still reading the prompt); None where it cannot, or no call is in flight. Read from
+        another thread while `generate` runs."""
+        return None
+
     def close(self) -> None:
         """Release connections, threads or GPU memory."""
 

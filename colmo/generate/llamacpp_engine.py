@@ -46,6 +46,7 @@ class LlamaCppGenerator(LanguageModelGenerator):
             source, model = f"{cfg.repo_id}/{cfg.filename}", f"{cfg.repo_id}/{cfg.filename}"
         self.name = f"llamacpp:{model}"
         self._cancelled = threading.Event()
+        self._tokens: Optional[int] = None  # the call in flight's tokens so far; None between calls
         start = time.perf_counter()
         try:
             if cfg.model_path is not None:
@@ -67,8 +68,13 @@ class LlamaCppGenerator(LanguageModelGenerator):
     def cancel(self) -> None:
         self._cancelled.set()
 
+    def tokens_so_far(self) -> Optional[int]:
+        return self._tokens
+
     def _end_if_cancelled(self, input_ids: Any, scores: np.ndarray) -> np.ndarray:
-        """A logits processor: unchanged scores, or only the end-of-text token once cancelled."""
+        """A logits processor, called once per token generated: unchanged scores, or only the
+        end-of-text token once cancelled; it counts the call's tokens (`tokens_so_far`)."""
+        self._tokens = (self._tokens or 0) + 1
         if not self._cancelled.is_set():
             return scores
         ended = np.full_like(scores, -np.inf)
@@ -81,7 +87,7 @@ class LlamaCppGenerator(LanguageModelGenerator):
             temperature=cfg.temperature_for(prompt.retry), top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=self.request_seed(),
             logits_processor=self._until_cancelled,
         )
-        start = time.perf_counter()
+        start, self._tokens = time.perf_counter(), 0
         try:
             if self.chat:
                 response = self._llm.create_chat_completion(messages=prompt.messages, **sampling)
@@ -91,6 +97,8 @@ class LlamaCppGenerator(LanguageModelGenerator):
             raise GeneratorError(f"llama.cpp refused the prompt ({describe_error(error)}); raise llm.n_ctx") from error
         except Exception as error:
             raise GeneratorError(f"llama.cpp failed: {describe_error(error)}") from error
+        finally:
+            self._tokens = None
         seconds = time.perf_counter() - start
         text = _text(response, self.chat)
         usage: dict[str, Any] = response.get("usage") or {}
