@@ -56,11 +56,15 @@ def cheetah_probe():
     probe.close()
 
 
-def run_on_zeros(code: str, obs_size: int) -> np.ndarray:
+def run_on(code: str, obs: np.ndarray) -> np.ndarray:
     namespace: dict = {}
     exec(code, namespace)  # our own generator's output, in a test
     with np.errstate(all="ignore"):
-        return np.asarray(namespace["policy"](np.zeros(obs_size)), dtype=float)
+        return np.asarray(namespace["policy"](obs), dtype=float)
+
+
+def run_on_zeros(code: str, obs_size: int) -> np.ndarray:
+    return run_on(code, np.zeros(obs_size))
 
 
 def indices_read(code: str) -> set[int]:
@@ -132,6 +136,20 @@ def test_children_keep_the_action_shape_of_array_policies(cheetah_probe):
     children = MutateGenerator(MutateConfig(), seed=0, probe=cheetah_probe).generate(make_prompt(cheetah), 30)
     assert all(run_on_zeros(g.text, 17).shape == (6,) for g in children)
     assert len({parametrize(g.text).key for g in children}) == 30
+
+
+def test_where_the_action_is_a_vector_children_give_actuators_gains_of_their_own(cheetah_probe):
+    """The cheetah's starter returns `np.zeros(6)`: every scalar term gives all six joints the
+    same torque. Its children include actuator terms, a gain per joint, and their actions differ
+    across joints; a scalar task's children never get one."""
+    starter = load_spec("cheetah.py").starter_code
+    children = MutateGenerator(MutateConfig(), seed=0, probe=cheetah_probe).generate(make_prompt(starter), 30)
+    vectors = [g.text for g in children if re.search(r"np\.array\(\[(?:[^,\]]+, ){5}[^,\]]+\]\) \*", g.text)]
+    assert vectors, [g.text for g in children]
+    obs = np.random.default_rng(0).normal(size=17)
+    assert any(np.ptp(run_on(code, obs)) > 0 for code in vectors)  # joints that differ
+    scalar = MutateGenerator(MutateConfig(), seed=0).generate(make_prompt(STARTER, text=load_spec("pendulum.py").prompt_text), 30)
+    assert not any("np.array([" in g.text for g in scalar)
 
 
 def test_children_of_a_program_without_numpy_import_it(pendulum_probe):

@@ -11,6 +11,9 @@ then takes 1..`max_mutations` of these mutations (0.. after a crossover):
   - insert a term: `e` -> `e + c * f`, where a feature `f` is an observation entry `obs[i]`, a
     local variable, a product `obs[i] * obs[j]`, an energy-like `obs[i] ** 2`, an angle
     `np.arctan2(obs[i], obs[j])` or `np.sin/cos/tanh/sign/abs(obs[i])`;
+  - where the action is a vector ("return shape is (K,)" in the prompt), insert an actuator
+    term into what the policy returns: `e` -> `e + np.array([c1, ..., cK]) * f`, a gain per
+    actuator (every other term gives all actuators the same value);
   - replace a subexpression with a new term: `c * f`, or linear (PD) feedback
     `c1 * obs[i] + c2 * obs[j]`;
   - wrap a subexpression: `np.sin/cos/tanh/sign/abs(e)` or `np.clip(e, -c1, c2)`;
@@ -44,11 +47,12 @@ import numpy as np
 from colmo import astutil
 from colmo.config import MutateConfig
 from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, logger
-from colmo.generate.operators import CROSSOVERS, MUTATIONS, Pieces, policy_function
+from colmo.generate.operators import ACTUATOR_MUTATIONS, CROSSOVERS, MUTATIONS, Pieces, policy_function
 from colmo.program import DISPLAY_DIGITS, ProgramError, instantiate, parametrize
 from colmo.prompt import Prompt
 
 _OBS_SIZE = re.compile(r"obs\w*\s*(?:size is|\(size)\s*(\d+)", re.IGNORECASE)
+_ACTION_SIZE = re.compile(r"return shape is \((\d+),\)", re.IGNORECASE)
 
 
 class _Parent:
@@ -73,9 +77,8 @@ class MutateGenerator(Generator):
     def __init__(self, cfg: MutateConfig, seed: int, probe: Optional[Probe] = None):
         super().__init__(cfg, seed, probe)
         self.rng = np.random.default_rng(seed)
-        operators, weights = zip(*MUTATIONS)
-        self._mutations = operators
-        self._weights = np.array(weights) / sum(weights)
+        # The operators and their probabilities for a scalar action (False) and a vector one (True).
+        self._mutations = {vector: _weighted(MUTATIONS + (ACTUATOR_MUTATIONS if vector else ())) for vector in (False, True)}
 
     def generate(self, prompt: Prompt, n: int) -> list[Generation]:
         parents = []
@@ -86,8 +89,9 @@ class MutateGenerator(Generator):
                 logger.debug("mutate: skipping a prompt program without a parsable `def policy`")
         if not parents:
             raise GeneratorError("mutate: none of the prompt's programs parses with a `def policy(obs)`")
-        stated = _OBS_SIZE.search("\n".join([prompt.text, *prompt.programs]))
-        pieces = Pieces(self.rng, parents, int(stated.group(1)) if stated else None)
+        text = "\n".join([prompt.text, *prompt.programs])
+        stated, actions = _OBS_SIZE.search(text), _ACTION_SIZE.search(text)
+        pieces = Pieces(self.rng, parents, int(stated.group(1)) if stated else None, int(actions.group(1)) if actions else 1)
         # Probing a child only says something if its parents pass the probe themselves.
         probe = self.probe if self.probe is not None and all(self.probe(p.code) for p in parents) else None
         seen = {parent.key for parent in parents}
@@ -128,10 +132,11 @@ class MutateGenerator(Generator):
             first = self._choose(parents, 1)[0]
             tree = copy.deepcopy(first.tree)
         fn = policy_function(tree)
+        operators, weights = self._mutations[pieces.action_size > 1]
         for _ in range(mutations):
             # Operators in a weighted random order: the first one that applies does.
-            for i in self.rng.choice(len(self._mutations), size=len(self._mutations), replace=False, p=self._weights):
-                if self._mutations[i](fn, pieces):
+            for i in self.rng.choice(len(operators), size=len(operators), replace=False, p=weights):
+                if operators[i](fn, pieces):
                     break
         return first, tree
 
@@ -144,3 +149,9 @@ class MutateGenerator(Generator):
         program = parametrize(parent.code)
         values = np.array(program.values) * (1.0 + self.cfg.constant_sigma * self.rng.standard_normal(program.n_params))
         return instantiate(program.skeleton, values, digits=DISPLAY_DIGITS) + "\n"
+
+
+def _weighted(mutations: tuple) -> tuple[tuple, np.ndarray]:
+    """The operators of `(operator, weight)` pairs and their probabilities."""
+    operators, weights = zip(*mutations)
+    return operators, np.array(weights) / sum(weights)

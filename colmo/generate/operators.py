@@ -2,7 +2,7 @@
 
 `Pieces` draws random code fragments for the children of one prompt, written with the names
 and observation entries its programs use: terms (`c * feature`, PD feedback), conditions,
-wrappers. `MUTATIONS` (with their weights) and `CROSSOVERS` each edit a policy function in
+wrappers. `MUTATIONS` (with their weights; `ACTUATOR_MUTATIONS` too where the action is a vector) and `CROSSOVERS` each edit a policy function in
 place and say whether they found something to edit; `colmo.generate.mutate` documents what
 each does and chooses among them.
 """
@@ -81,8 +81,9 @@ class Pieces:
     """Random code fragments for the children of one prompt, written with the names and
     observation entries its programs use."""
 
-    def __init__(self, rng: np.random.Generator, parents: Sequence[Any], stated_obs_size: Optional[int]):
+    def __init__(self, rng: np.random.Generator, parents: Sequence[Any], stated_obs_size: Optional[int], action_size: int = 1):
         self.rng = rng
+        self.action_size = action_size  # entries of the action vector (1: a scalar action)
         self.obs = parents[0].fn.args.args[0].arg if parents[0].fn.args.args else "obs"
         imports = [a for n in parents[0].tree.body if isinstance(n, ast.Import) for a in n.names]
         self.np = next(a.asname or a.name for a in imports if a.name == "numpy")
@@ -134,6 +135,11 @@ class Pieces:
             first, second = self.entries(2)
             return _expression(f"{self.sign()}{self.magnitude()} * {first} {self.pick('+-')} {self.magnitude()} * {second}")
         return _expression(f"{self.sign()}{self.magnitude()} * {self.feature()}")
+
+    def gains(self) -> str:
+        """A gain per actuator, `np.array([c1, ..., cK])`: random signs and magnitudes from 0.1 to 1."""
+        values = ", ".join(f"{self.sign()}{self.magnitude(high=0.0)}" for _ in range(self.action_size))
+        return f"{self.np}.array([{values}])"
 
     def extended(self, node: ast.expr) -> ast.expr:
         """`node + c * feature` or `node - c * feature`."""
@@ -260,6 +266,24 @@ def _flip_comparison(fn: ast.FunctionDef, pieces: Pieces) -> bool:
     return True
 
 
+def _insert_actuator_term(fn: ast.FunctionDef, pieces: Pieces) -> bool:
+    """`e` -> `e + np.array([c1, ..., cK]) * f` where `e` is what the policy returns (a returned
+    expression, or the value of a variable it returns): each actuator its own gain on a feature.
+    The other terms give every actuator the same value; a gait needs joints that differ."""
+    returned = {n.id for r in ast.walk(fn) if isinstance(r, ast.Return) and r.value for n in ast.walk(r.value) if isinstance(n, ast.Name)}
+    targets = [
+        s for s in ast.walk(fn)
+        if (isinstance(s, ast.Return) and s.value is not None)
+        or (isinstance(s, ast.Assign) and len(s.targets) == 1 and isinstance(s.targets[0], ast.Name) and s.targets[0].id in returned)
+    ]
+    statement = pieces.pick(targets)
+    if statement is None:
+        return False
+    term = _expression(f"{pieces.gains()} * {pieces.feature()}")
+    statement.value = ast.BinOp(statement.value, ast.Add(), term)
+    return True
+
+
 def _redraw_constant(fn: ast.FunctionDef, pieces: Pieces) -> bool:
     constant = pieces.pick([node for node in value_nodes(fn) if _is_number(node)])
     if constant is None:
@@ -282,6 +306,8 @@ MUTATIONS = (
     (_flip_comparison, 1.0),
     (_redraw_constant, 0.5),
 )
+# Added to `MUTATIONS` where the action is a vector.
+ACTUATOR_MUTATIONS = ((_insert_actuator_term, 2.0),)
 
 
 # Each crossover edits a copy of the first program's policy, taking material from the second's.
