@@ -2,8 +2,10 @@
 # Issue 34 part 3, exploration: why locomotion searches stall, one seed and 30 minutes a run
 # (search.max_seconds=1800, everything included), colmo's embedded mutation (llm=mutate), two
 # evaluation workers. Each variant changes one thing against the default:
+#   cheetah/default     with mutation's actuator terms (a gain per joint); mixed-generation's
+#                       cheetah mutate runs are the same search before them
 #   quadruped/default   the corrected task (upright start), GFO (1+1)-ES
-#   cheetah/cma         GFO CMA-ES instead of (1+1)-ES (cheetah/default is mixed-generation's mutate s0)
+#   cheetah/cma         GFO CMA-ES instead of (1+1)-ES
 #   cheetah/episodes20  20 training episodes instead of 10 (its winners lost 20-90 held-out)
 #   quadruped/cma       GFO CMA-ES
 # Each run is a one-job sweep into its own directory, so running this again keeps what finished
@@ -20,6 +22,7 @@ run() {  # task variant overrides...
   colmo -m "task=$task" "seed=$seed" llm=mutate search.max_seconds=1800 search.max_samples=1000000 search.progress=false \
     "hydra.sweep.dir=$task/$variant/s$seed" "$@" || echo "run $task $variant s$seed exited $?"
 }
+run cheetah default
 run quadruped default
 run cheetah cma gfo=cma
 run cheetah episodes20 task.episodes=20
