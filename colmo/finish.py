@@ -247,7 +247,8 @@ def finish(
             log.warning("no time left for the robustness report of the best policy (search.max_seconds)")
         else:
             step = time.monotonic()
-            best.robustness = _robustness(cfg, executor, evaluator, top[0], run_dir)
+            # More episodes for a stated precision only from the slack: the simplification keeps its planned slot.
+            best.robustness = _robustness(cfg, executor, evaluator, top[0], run_dir, until - plan.render_seconds - plan.simplify_seconds)
             took["robustness"] = time.monotonic() - step
     if cfg.evaluation.simplify:
         simplify_until = until - plan.render_seconds
@@ -307,26 +308,32 @@ def _coverage(executor: Executor, evaluator: Evaluator, heldout: Evaluator, reco
     return coverage.summary(record.code, evaluation.coverage, len(both.seeds))
 
 
-def _robustness(cfg: SearchConfig, executor: Executor, evaluator: Evaluator, record: SampleRecord, run_dir: Path) -> dict:
+def _robustness(cfg: SearchConfig, executor: Executor, evaluator: Evaluator, record: SampleRecord, run_dir: Path, until: float) -> dict:
     """The best policy's robustness report (`colmo.robustness`) on `evaluation.robustness_episodes`
-    held-out episodes per grid point, saved into the run directory; the summary's `robustness`."""
-    options = cfg.evaluation
+    held-out episodes per grid point (with `evaluation.robustness_precision`, more while they fit
+    before `until`, at the pace of those scored), saved into the run directory; the summary's `robustness`."""
+    options, started = cfg.evaluation, time.monotonic()
+
+    def may_add(scored: int, added: int) -> bool:
+        return time.monotonic() + (time.monotonic() - started) * added / scored <= until
+
     report = robustness_of(
         executor, evaluator, record.skeleton, record.params, cfg.seed, options.robustness_episodes,
-        options.robustness_magnitudes, options.robustness_delays,
+        options.robustness_magnitudes, options.robustness_delays, options.robustness_precision, options.robustness_max_episodes, may_add,
     )
     if any(point.evaluation.failure == CANCELLED for point in report.points):  # the search is stopping at once
         return {}
     paths = save(report, run_dir, f"{cfg.task.name}: best policy (sample {record.sample})")
     headline = report.headline()
+    episodes = len(report.nominal.returns) or options.robustness_episodes
     log.info(
         "best policy under model mismatch (%d held-out episodes per point): nominal %s, worst %s, every factor at 10%% %s; %s",
-        options.robustness_episodes, *(_shown(headline[name]) for name in ("robustness_nominal", "robustness_worst", "robustness_all_10")),
+        episodes, *(_shown(headline[name]) for name in ("robustness_nominal", "robustness_worst", "robustness_all_10")),
         ", ".join(path.name for path in paths),
     )
     for failure in report.failures():
         log.warning("robustness: %s", failure)
-    return {**headline, "episodes": options.robustness_episodes, "files": [path.name for path in paths]}
+    return {**headline, "episodes": episodes, "files": [path.name for path in paths]}
 
 
 def _shown(score: Optional[float]) -> str:

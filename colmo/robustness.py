@@ -162,11 +162,12 @@ def precise(report: RobustnessReport, precision: float) -> bool:
 
 def adaptive_report(
     score: Callable[[PerturbConfig, int, int], Evaluation], magnitudes: Sequence[float], delays: Sequence[int], episodes: int,
-    precision: Optional[float] = None, max_episodes: Optional[int] = None,
+    precision: Optional[float] = None, max_episodes: Optional[int] = None, may_add: Callable[[int, int], bool] = lambda scored, added: True,
 ) -> RobustnessReport:
     """`robustness_report` on the first `episodes` episodes (`score(perturb, start, stop)`: a
     point's evaluation on episodes start..stop-1). With `precision`, more episodes for every
-    point, doubling, until the report is `precise` or `max_episodes` are scored: every point gets
+    point, doubling, until the report is `precise`, `max_episodes` are scored or `may_add(scored,
+    added)` (episodes per point so far, and to add) says no (a time limit): every point gets
     the same episodes, so that the points stay paired; a point that failed is not run again."""
     scored: dict[str, Evaluation] = {}
     span = (0, episodes)
@@ -183,6 +184,8 @@ def adaptive_report(
     most = max(episodes, max_episodes or episodes)
     while precision is not None and span[1] < most and not precise(report, precision):
         span = (span[1], min(2 * span[1], most))
+        if not may_add(span[0], span[1] - span[0]):
+            break
         report = robustness_report(score_so_far, magnitudes, delays)
     return report
 

@@ -187,7 +187,9 @@ def test_a_search_with_evaluation_robustness_saves_and_logs_its_best_policys_rep
     run = run_colmo(
         "colmo", "task=pendulum", "search.max_samples=2", "llm.batch_size=2", "gfo=none", "task.episodes=1",
         "evaluation.episodes=1", "evaluation.top=1", "evaluation.render=false", "evaluation.simplify=false",
-        "executor.workers=1", "search.progress=false", "evaluation.robustness=true", "evaluation.robustness_episodes=1",
+        "executor.workers=1", "search.progress=false", "evaluation.robustness=true", "evaluation.robustness_episodes=2",
+        # A precision no 4 episodes reach: the report doubles its episodes once, to the cap.
+        "evaluation.robustness_precision=0.0001", "evaluation.robustness_max_episodes=4",
         "evaluation.robustness_magnitudes=[0.1]", "evaluation.robustness_delays=[]", f"hydra.run.dir={tmp_path / 'run'}",
         cwd=tmp_path, timeout=600,
     )
@@ -198,6 +200,7 @@ def test_a_search_with_evaluation_robustness_saves_and_logs_its_best_policys_rep
     assert all((tmp_path / "run" / name).is_file() for name in robustness["files"])
     saved = json.loads((tmp_path / "run" / "robustness.json").read_text())
     assert [entry["magnitude"] for entry in saved["robustness"]] == [0.0, 0.1]
+    assert saved["episodes"] == robustness["episodes"] == 4
     assert robustness["robustness_nominal"] == saved["robustness"][0]["all"]
     assert robustness["robustness_all_10"] == saved["robustness"][1]["all"]
     assert robustness["robustness_worst"] == min(value for entry in saved["robustness"] for name, value in entry.items() if name != "magnitude")
@@ -246,3 +249,9 @@ def test_with_a_precision_every_point_gets_more_episodes_until_its_interval_hold
     assert sum(1 for key, *_ in asked if "delay=3" in key) == 1  # failed at once: never again
     assert len(adaptive_report(score, [0.1], [], episodes=4).nominal.returns) == 4  # no precision: as asked
     assert len(adaptive_report(score, [0.1], [], episodes=4, precision=0.01, max_episodes=12).nominal.returns) == 12  # the cap
+    # Out of time: asked before each doubling with the episodes scored and those it would add.
+    questions = []
+    timed = adaptive_report(
+        score, [0.1], [], episodes=4, precision=0.01, max_episodes=100, may_add=lambda scored, added: questions.append((scored, added)) or scored < 8,
+    )
+    assert len(timed.nominal.returns) == 8 and questions == [(4, 4), (8, 8)]

@@ -11,7 +11,7 @@ from colmo.config.components import ExecutorConfig, GFOConfig, TrackerConfig
 from colmo.config.fields import option, require
 from colmo.config.generators import GeneratorConfig
 from colmo.config.search import DatabaseConfig, HeldoutConfig, SearchLoopConfig, SimplifyConfig
-from colmo.config.task import ROBUSTNESS_DELAYS, ROBUSTNESS_MAGNITUDES, TaskConfig, check_robustness_grid
+from colmo.config.task import MAX_EPISODES_HELP, PRECISION_HELP, ROBUSTNESS_DELAYS, ROBUSTNESS_MAGNITUDES, TaskConfig, check_robustness_grid
 
 
 @dataclass
@@ -74,23 +74,16 @@ class EvaluateConfig(PolicyFileConfig):
         20, "held-out episodes per robustness grid point, the same for every point: each point's score and its change from "
         "nominal come with a 95% interval (paired over the episodes)",
     )
-    robustness_precision: Optional[float] = option(
-        None, "more held-out episodes for every grid point, doubling from robustness_episodes, until each point's 95% interval "
-        "half-width is at most this share of the nominal score (0.05: 5%), up to robustness_max_episodes; null: robustness_episodes exactly",
-    )
-    robustness_max_episodes: int = option(320, "the most held-out episodes per grid point that robustness_precision may take")
+    robustness_precision: Optional[float] = option(None, PRECISION_HELP)
+    robustness_max_episodes: int = option(320, MAX_EPISODES_HELP)
     robustness_magnitudes: list[float] = option(ROBUSTNESS_MAGNITUDES, "relative magnitudes of the robustness grid (0, nominal, is always scored)")
     robustness_delays: list[int] = option(ROBUSTNESS_DELAYS, "control delays (steps) of the robustness grid")
 
     def __post_init__(self) -> None:
         super().__post_init__()
         require(self.episodes >= 1, f"episodes must be >= 1, got {self.episodes}")
-        check_robustness_grid("", self.robustness_episodes, self.robustness_magnitudes, self.robustness_delays)
-        precision = self.robustness_precision
-        require(precision is None or precision > 0, f"robustness_precision must be > 0 or null, got {precision}")
-        require(
-            self.robustness_max_episodes >= self.robustness_episodes,
-            f"robustness_max_episodes ({self.robustness_max_episodes}) must be >= robustness_episodes ({self.robustness_episodes})",
+        check_robustness_grid(
+            "", self.robustness_episodes, self.robustness_magnitudes, self.robustness_delays, self.robustness_precision, self.robustness_max_episodes,
         )
 
 

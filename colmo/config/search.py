@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import Optional
 
 from colmo.config.fields import above, at_least, option, require
-from colmo.config.task import ROBUSTNESS_DELAYS, ROBUSTNESS_MAGNITUDES, check_robustness_grid
+from colmo.config.task import MAX_EPISODES_HELP, PRECISION_HELP, ROBUSTNESS_DELAYS, ROBUSTNESS_MAGNITUDES, check_robustness_grid
 
 
 @dataclass
@@ -56,12 +56,17 @@ class HeldoutConfig:
         "(comments in best_policy.py; colmo.coverage)",
     )
     robustness_episodes: int = option(3, "held-out episodes per robustness grid point")
+    robustness_precision: Optional[float] = option(None, PRECISION_HELP + " (more only where the finish's time allows)")
+    robustness_max_episodes: int = option(320, MAX_EPISODES_HELP)
     robustness_magnitudes: list[float] = option(ROBUSTNESS_MAGNITUDES, "relative magnitudes of the robustness grid (0, nominal, is always scored)")
     robustness_delays: list[int] = option(ROBUSTNESS_DELAYS, "control delays (steps) of the robustness grid")
 
     def __post_init__(self) -> None:
         at_least(self, "evaluation", episodes=1, top=1)
-        check_robustness_grid("evaluation.", self.robustness_episodes, self.robustness_magnitudes, self.robustness_delays)
+        check_robustness_grid(
+            "evaluation.", self.robustness_episodes, self.robustness_magnitudes, self.robustness_delays, self.robustness_precision,
+            self.robustness_max_episodes,
+        )
 
 
 @dataclass

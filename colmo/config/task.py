@@ -45,11 +45,26 @@ ROBUSTNESS_MAGNITUDES = [0.05, 0.1, 0.2, 0.4]  # a robustness grid's relative ma
 ROBUSTNESS_DELAYS = [1, 2, 4]  # ... and its control delays, in steps
 
 
-def check_robustness_grid(group: str, episodes: int, magnitudes: list[float], delays: list[int]) -> None:
+def check_robustness_grid(
+    group: str, episodes: int, magnitudes: list[float], delays: list[int], precision: Optional[float], max_episodes: int,
+) -> None:
     """`ConfigError` for a robustness grid (`group`'s `robustness_*` fields) that cannot be scored."""
     require(episodes >= 1, f"{group}robustness_episodes must be >= 1, got {episodes}")
     require(all(0 < m < 1 for m in magnitudes), f"{group}robustness_magnitudes must lie in (0, 1), got {list(magnitudes)}")
     require(all(k >= 1 for k in delays), f"{group}robustness_delays must be >= 1 step, got {list(delays)}")
+    require(precision is None or precision > 0, f"{group}robustness_precision must be > 0 or null, got {precision}")
+    require(
+        max_episodes >= episodes,
+        f"{group}robustness_max_episodes ({max_episodes}) must be >= {group}robustness_episodes ({episodes})",
+    )
+
+
+# The options of an adaptive robustness report (`colmo.robustness.adaptive_report`), in both configs that make one.
+PRECISION_HELP = (
+    "more held-out episodes for every grid point, doubling from robustness_episodes, until each point's 95% interval "
+    "half-width is at most this share of the nominal score (0.05: 5%), up to robustness_max_episodes; null: robustness_episodes exactly"
+)
+MAX_EPISODES_HELP = "the most held-out episodes per grid point that robustness_precision may take"
 
 
 @dataclass

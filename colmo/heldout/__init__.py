@@ -13,7 +13,7 @@ front end.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Optional, Sequence
+from typing import Callable, Optional, Sequence
 
 from colmo.config import ExecutorConfig, PerturbConfig, TaskConfig
 from colmo.environments.perturb import with_perturbation
@@ -61,13 +61,15 @@ def task_evaluator(task: TaskConfig, executor_cfg: ExecutorConfig, executor: Exe
 def robustness_of(
     executor: Executor, evaluator: Evaluator, skeleton: str, params: Sequence[float], seed: int, episodes: int,
     magnitudes: Sequence[float], delays: Sequence[int], precision: Optional[float] = None, max_episodes: Optional[int] = None,
+    may_add: Callable[[int, int], bool] = lambda scored, added: True,
 ) -> RobustnessReport:
     """The robustness report of a program on `episodes` held-out episodes of run seed `seed`
-    (with `precision`, more until it holds, up to `max_episodes`: `colmo.robustness.adaptive_report`),
+    (with `precision`, more until it holds, up to `max_episodes` and while `may_add` agrees:
+    `colmo.robustness.adaptive_report`),
     every grid point scored by the referee on the task's nominal model plus that point's perturbation."""
     heldout = heldout_evaluator(evaluator, seed, max(episodes, max_episodes or episodes) if precision is not None else episodes)
 
     def score(perturb: PerturbConfig, start: int, stop: int) -> Evaluation:
         return heldout_score(executor, perturbed(replace(heldout, seeds=heldout.seeds[start:stop]), perturb), skeleton, tuple(params))
 
-    return adaptive_report(score, magnitudes, delays, episodes, precision, max_episodes)
+    return adaptive_report(score, magnitudes, delays, episodes, precision, max_episodes, may_add)
