@@ -142,12 +142,16 @@ def test_where_the_action_is_a_vector_children_give_actuators_gains_of_their_own
     """The cheetah's starter returns `np.zeros(6)`: every scalar term gives all six joints the
     same torque. Its children include actuator terms, a gain per joint, and their actions differ
     across joints; a scalar task's children never get one."""
-    starter = load_spec("cheetah.py").starter_code
-    children = MutateGenerator(MutateConfig(), seed=0, probe=cheetah_probe).generate(make_prompt(starter), 30)
+    spec = load_spec("cheetah.py")
+    children = MutateGenerator(MutateConfig(), seed=0, probe=cheetah_probe).generate(make_prompt(spec.starter_code), 30)
     vectors = [g.text for g in children if re.search(r"np\.array\(\[(?:[^,\]]+, ){5}[^,\]]+\]\) \*", g.text)]
     assert vectors, [g.text for g in children]
     obs = np.random.default_rng(0).normal(size=17)
     assert any(np.ptp(run_on(code, obs)) > 0 for code in vectors)  # joints that differ
+    # As a search prompts it: the task's text says the action's shape, the shown code need not.
+    bare = "import numpy as np\n\ndef policy(obs):\n    return np.zeros(6) + 0.5 * obs[8]\n"
+    searched = MutateGenerator(MutateConfig(), seed=0, probe=cheetah_probe).generate(make_prompt(bare, text=spec.prompt_text), 30)
+    assert any("np.array([" in g.text for g in searched)
     scalar = MutateGenerator(MutateConfig(), seed=0).generate(make_prompt(STARTER, text=load_spec("pendulum.py").prompt_text), 30)
     assert not any("np.array([" in g.text for g in scalar)
 

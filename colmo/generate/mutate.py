@@ -11,7 +11,7 @@ then takes 1..`max_mutations` of these mutations (0.. after a crossover):
   - insert a term: `e` -> `e + c * f`, where a feature `f` is an observation entry `obs[i]`, a
     local variable, a product `obs[i] * obs[j]`, an energy-like `obs[i] ** 2`, an angle
     `np.arctan2(obs[i], obs[j])` or `np.sin/cos/tanh/sign/abs(obs[i])`;
-  - where the action is a vector ("return shape is (K,)" in the prompt), insert an actuator
+  - where the action is a vector ("Action (shape (K,))" or "return shape is (K,)" in the prompt), insert an actuator
     term into what the policy returns: `e` -> `e + np.array([c1, ..., cK]) * f`, a gain per
     actuator (every other term gives all actuators the same value);
   - replace a subexpression with a new term: `c * f`, or linear (PD) feedback
@@ -52,7 +52,8 @@ from colmo.program import DISPLAY_DIGITS, ProgramError, instantiate, parametrize
 from colmo.prompt import Prompt
 
 _OBS_SIZE = re.compile(r"obs\w*\s*(?:size is|\(size)\s*(\d+)", re.IGNORECASE)
-_ACTION_SIZE = re.compile(r"return shape is \((\d+),\)", re.IGNORECASE)
+# A task's text says "Action (shape (6,))", a starter's docstring "return shape is (6,)".
+_ACTION_SIZE = re.compile(r"(?:return shape is|action \(shape) \((\d+),\)", re.IGNORECASE)
 
 
 class _Parent:
