@@ -292,6 +292,10 @@ CORPUS = {
         f"lambda self: {FORGED_REPLIES['10**400 control steps']!r}.encode())\n" + NOTHING, True, "fast", 1, "program: malformed reply: ",
     ),
     "pre-sent actions": (PRESEND + NOTHING, True, "referee", 5, "timeout: "),
+    "a policy process that outlives the quit": (
+        "import sys\nsys.modules['builtins'].setattr(sys.modules['os'], '_exit', lambda code: sys.modules['time'].sleep(600))\n" + NOTHING,
+        True, "referee", 1, "tampering: the policy process outlived the referee's quit message",
+    ),
     "bytes of an object array": (policy_doing("bytes(np.array([None, obs[0]]))"), False, "fast", 1, "exception: TypeError: bytes() of an array of objects is refused"),
     "whether ~/.netrc exists": (libc_call("libc.access('{netrc}'.encode(), 0)"), True, "fast", 1, "exception: SystemExit: 1"),  # EPERM, not ENOENT or 0
     "ioctl FS_IOC_SETFLAGS": (libc_call("libc.ioctl(0, 0x40086602, buffer)"), True, "fast", 1, "exception: SystemExit: 1"),
