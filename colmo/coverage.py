@@ -40,7 +40,7 @@ from colmo.program import PARAMS_NAME
 BRANCH, CALL, DIVIDE = "__colmo_branch__", "__colmo_call__", "__colmo_divide__"
 CONDITION_KINDS = ("if", "while", "conditional")
 CALL_KINDS = ("clip", "where")
-_DIVISIONS = {ast.Div: operator.truediv, ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod}
+_DIVISIONS = {"Div": operator.truediv, "FloorDiv": operator.floordiv, "Mod": operator.mod}  # by the operator's AST name
 MAX_SITES = 100_000  # far more than a program under the intake's node limit can hold
 # Tests (or values); then true, raised by a clip, or a zero divisor; then lowered by a clip, or not finite.
 Counts = tuple[int, int, int]
@@ -109,9 +109,8 @@ class _Sites(ast.NodeTransformer):
             return node
         return ast.Call(ast.Name(CALL, ast.Load()), [ast.Constant(index), ast.Constant(name), node.func, *node.args], node.keywords)
 
-
     def visit_BinOp(self, node: ast.BinOp) -> ast.AST:
-        if type(node.op) not in _DIVISIONS or self._constant(node.right):
+        if type(node.op).__name__ not in _DIVISIONS or self._constant(node.right):
             return self.generic_visit(node)
         index = self._site("division", node, node)
         self.generic_visit(node)
@@ -176,7 +175,7 @@ class Probe:
         return result
 
     def divide(self, index: int, operation: str, left: Any, right: Any) -> Any:
-        result = _DIVISIONS[getattr(ast, operation)](left, right)  # exactly the program's operation, errors included
+        result = _DIVISIONS[operation](left, right)  # exactly the program's operation, errors included
         try:
             values = np.asarray(result, dtype=float)
             zero = np.broadcast_to(np.asarray(right, dtype=float) == 0, values.shape)

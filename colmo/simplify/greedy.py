@@ -268,11 +268,12 @@ def simplify(
             steps.append(Step(f"constants written to {DISPLAY_DIGITS} significant digits", current, scores, measure(current)))
 
     current, renamings = renamed(current, names, function_name=function_name)
-    steps += [Step(description, current, scores, measure(current)) for description in renamings]
+    size = measure(current)
+    steps += [Step(description, current, scores, size) for description in renamings]
 
     return SimplifyResult(
         code_initial=code, code=current, scores_initial=scores_initial, scores=scores,
-        size_initial=measure(code), size=measure(current), steps=tuple(steps),
+        size_initial=measure(code), size=size, steps=tuple(steps),
         programs_scored=len(scorer.train_scores), heldout_scored=len(scorer.heldout_scores), rounds=rounds,
         static_pass_confirmed=confirmed, retuned=retuned, seconds=time.perf_counter() - start,
     )
