@@ -11,14 +11,17 @@
 # Each run is a one-job sweep into its own directory, so running this again keeps what finished
 # and resumes the rest (a resumed run's time limit is the whole run's).
 #
-#   scripts/locomotion_experiment.sh OUT [SEED]
+#   scripts/locomotion_experiment.sh OUT [SEED [TASK/VARIANT ...]]   all five variants unless named
 #   python scripts/mixed_summary.py OUT        the table (its comparison is with a `mutate` variant, if any)
 set -u
 out=$(mkdir -p "$1" && cd "$1" && pwd)
 seed=${2:-0}
+shift $(($# < 2 ? $# : 2))
+wanted=" $* "
 cd "$out"
 run() {  # task variant overrides...
   local task=$1 variant=$2; shift 2
+  [ "$wanted" = "  " ] || [[ "$wanted" == *" $task/$variant "* ]] || return 0
   colmo -m "task=$task" "seed=$seed" llm=mutate search.max_seconds=1800 search.max_samples=1000000 search.progress=false \
     "hydra.sweep.dir=$task/$variant/s$seed" "$@" || echo "run $task $variant s$seed exited $?"
 }
