@@ -86,6 +86,27 @@ def _check_creatable(directory: Path) -> None:
         raise ConfigError(f"cannot create the output directory {directory}: {reason}") from None
 
 
+# Config keys renamed since a release, old prefix -> new (the old names keep working, with a
+# line saying the new one): `evaluation` named both held-out scoring and the search's finish.
+RENAMED_KEYS = {"evaluation.episodes": "heldout.episodes", "evaluation.": "finish."}
+
+
+def renamed(argv: list[str]) -> list[str]:
+    """`argv` with each override of a renamed key (`RENAMED_KEYS`) written with its new name,
+    which is said once per key on stderr."""
+    result = []
+    for arg in argv:
+        prefix = arg[: len(arg) - len(arg.lstrip("+~"))]
+        key = arg[len(prefix) :].split("=", 1)[0]
+        old = next((old for old in RENAMED_KEYS if key == old or (old.endswith(".") and key.startswith(old))), None)
+        if old is not None and not arg.startswith("-"):
+            new = RENAMED_KEYS[old] + key[len(old) :] if old.endswith(".") else RENAMED_KEYS[old]
+            print(f"colmo: {key} is now {new}: use the new name, the old one will stop working", file=sys.stderr)
+            arg = prefix + new + arg[len(prefix) + len(key) :]
+        result.append(arg)
+    return result
+
+
 def _verbose(overrides: list[str]) -> bool:
     return any(arg.replace(" ", "").lower() == "hydra.verbose=true" for arg in overrides)
 
@@ -189,6 +210,7 @@ def hydra_app(
                 register_schemas()  # imports installed packages' components: one may fail
             except ConfigError as error:
                 _fail(error, verbose=_verbose(sys.argv[1:]))
+            sys.argv[1:] = renamed(sys.argv[1:])  # Hydra reads sys.argv itself
             args = _parse(sys.argv[1:])
             if args.help:
                 from colmo.help import help_text  # only for --help: textwrap, resources, inspect
@@ -224,7 +246,7 @@ def hydra_app(
                 _exit_now(EXIT_INTERRUPTED)
             _exit_now(0)
 
-        main.check_command_line = lambda argv: check_overrides(_parse(argv))
+        main.check_command_line = lambda argv: check_overrides(_parse(renamed(argv)))
         return main
 
     return decorate

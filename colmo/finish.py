@@ -2,11 +2,11 @@
 simplified best policy, and a video and plot of it in action.
 
 A search selects programs by their training score, which therefore flatters the winner; the
-top `evaluation.top` structures get a held-out score from the referee on `evaluation.episodes`
+top `finish.top` structures get a held-out score from the referee on `heldout.episodes`
 fresh episodes (`colmo.heldout`). The best one's branches are counted over the training and
 held-out episodes (`colmo.coverage`: the comments of best_policy.py); it is then simplified (`colmo.simplify`) and
 rendered (`colmo.render`) on its first held-out episode, into the run directory; with
-`evaluation.robustness`, before that, scored over a grid of model-mismatch magnitudes
+`finish.robustness`, before that, scored over a grid of model-mismatch magnitudes
 (`colmo.robustness`: robustness.json/.csv/.png, a few numbers in the summary). Each step is
 optional, and none can fail the search: a missing OpenGL or a simplification that finds
 nothing to remove is a line in the log and in the summary.
@@ -105,11 +105,11 @@ class FinishPlan:
 
     def describe(self, cfg: SearchConfig) -> str:
         parts = [f"held-out scores of {self.top} program(s) over {self.heldout_episodes} episodes"]
-        if cfg.evaluation.robustness:
+        if cfg.finish.robustness:
             parts.append("robustness report" if self.robustness_seconds else "no robustness report")
-        if cfg.evaluation.simplify:
+        if cfg.finish.simplify:
             parts.append(f"simplification {self.simplify_seconds:.0f} s")
-        if cfg.evaluation.render:
+        if cfg.finish.render:
             parts.append(f"video {self.size[0]}x{self.size[1]}")
         return ", ".join(parts) + (" (reduced to fit search.max_seconds)" if self.reduced else "")
 
@@ -118,41 +118,41 @@ def plan_finish(cfg: SearchConfig, referee: RefereeCost, workers: int, available
     """The finish as configured if it fits in `available` seconds, else each step cheaper, in
     equal shares of it. `referee`: what its evaluations cost (measured on the search's programs)."""
     episode = referee.seconds(1, 1)  # one episode alone: the render's
-    episodes, top, workers = cfg.evaluation.episodes, cfg.evaluation.top, max(workers, 1)
+    episodes, top, workers = cfg.heldout.episodes, cfg.finish.top, max(workers, 1)
 
     def heldout_cost(programs: int, n: int) -> float:
         return programs * referee.seconds(n, workers)
 
     # The simplifier measures the best program twice on both episode sets, then a few rounds.
-    simplify = 6 * (heldout_cost(1, episodes) + heldout_cost(1, cfg.task.episodes)) if cfg.evaluation.simplify else 0.0
-    render = episode + _RENDER_FIXED_S + _VIDEO_S if cfg.evaluation.render else 0.0
-    grid = grid_points(cfg.evaluation.robustness_magnitudes, cfg.evaluation.robustness_delays)
-    robustness = heldout_cost(grid, cfg.evaluation.robustness_episodes) if cfg.evaluation.robustness else 0.0
+    simplify = 6 * (heldout_cost(1, episodes) + heldout_cost(1, cfg.task.episodes)) if cfg.finish.simplify else 0.0
+    render = episode + _RENDER_FIXED_S + _VIDEO_S if cfg.finish.render else 0.0
+    grid = grid_points(cfg.finish.robustness_magnitudes, cfg.finish.robustness_delays)
+    robustness = heldout_cost(grid, cfg.finish.robustness_episodes) if cfg.finish.robustness else 0.0
     full = FinishPlan(top, episodes, heldout_cost(top, episodes), simplify, render, _VIDEO_S, (640, 480), False, robustness)
     if full.seconds <= available:
         return full
     # The robustness report, already on few episodes, is whole or skipped: it keeps its cost if that fits in an equal share.
-    if robustness > available / (1 + cfg.evaluation.simplify + cfg.evaluation.render + cfg.evaluation.robustness):
+    if robustness > available / (1 + cfg.finish.simplify + cfg.finish.render + cfg.finish.robustness):
         robustness = 0.0
     available -= robustness
     # The render first gets what it cannot do without (the episode, the plot, a few frames).
-    render = max(episode + _RENDER_FIXED_S + _VIDEO_MIN_S, available / (1 + cfg.evaluation.simplify + cfg.evaluation.render)) if cfg.evaluation.render else 0.0
+    render = max(episode + _RENDER_FIXED_S + _VIDEO_MIN_S, available / (1 + cfg.finish.simplify + cfg.finish.render)) if cfg.finish.render else 0.0
     left = max(available - render, 0.0)
     # Simplifying measures the best program on the training and the held-out episodes, then scores
     # its candidates the same way: at least three such measurements, or it cannot start. So the
     # held-out episodes are as many as leave it that; further programs' held-out scores and a
     # longer simplification share what remains.
-    measurements = 3 if cfg.evaluation.simplify else 0
+    measurements = 3 if cfg.finish.simplify else 0
     training = heldout_cost(1, cfg.task.episodes)
     budget = max(left - measurements * training, 0.0) / (1 + measurements)  # for one held-out score
     held_out = next((n for n in range(episodes, workers, -workers) if heldout_cost(1, n) <= budget), min(workers, episodes))
     one = heldout_cost(1, held_out)  # a program's held-out score
     spare = left - one - measurements * (one + training)
-    kept = min(top, 1 + max(int(spare / (1 + cfg.evaluation.simplify) // one), 0))
+    kept = min(top, 1 + max(int(spare / (1 + cfg.finish.simplify) // one), 0))
     video = max(render - episode - _RENDER_FIXED_S, _VIDEO_MIN_S)
     return FinishPlan(
         kept, held_out, kept * one,
-        max(left - kept * one, 0.0) if cfg.evaluation.simplify else 0.0, render, video, (640, 480) if video >= _VIDEO_S else _SMALL, True, robustness,
+        max(left - kept * one, 0.0) if cfg.finish.simplify else 0.0, render, video, (640, 480) if video >= _VIDEO_S else _SMALL, True, robustness,
     )
 
 
@@ -205,7 +205,7 @@ def finish(
     rendered, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`;
     the best one's variables named against the spec's `observation_names` (`colmo.names`)."""
     best = BestPrograms()
-    warming = _warm_up_render() if cfg.evaluation.render else None
+    warming = _warm_up_render() if cfg.finish.render else None
     started, took = time.monotonic(), {}  # seconds each step took, for the closing log line
     plan = plan_finish(cfg, referee, executor.n_workers, max(_left(until), 0.0))
     if plan.reduced:
@@ -237,11 +237,11 @@ def finish(
         return best
     best.misnamed = misnamed(top[0].code, observation_names)
     took["held-out"] = time.monotonic() - step
-    if cfg.evaluation.coverage and best.heldout:
+    if cfg.finish.coverage and best.heldout:
         step = time.monotonic()
         best.coverage = _coverage(executor, evaluator, heldout, top[0], referee, until - plan.render_seconds)
         took["coverage"] = time.monotonic() - step
-    if cfg.evaluation.robustness:
+    if cfg.finish.robustness:
         # Its time comes out of the simplification's slot, which takes what is left.
         if not best.heldout or not plan.robustness_seconds or _left(until) - plan.render_seconds < plan.robustness_seconds:
             log.warning("no time left for the robustness report of the best policy (search.max_seconds)")
@@ -250,7 +250,7 @@ def finish(
             # More episodes for a stated precision only from the slack: the simplification keeps its planned slot.
             best.robustness = _robustness(cfg, executor, evaluator, top[0], run_dir, until - plan.render_seconds - plan.simplify_seconds)
             took["robustness"] = time.monotonic() - step
-    if cfg.evaluation.simplify:
+    if cfg.finish.simplify:
         simplify_until = until - plan.render_seconds
         # Simplifying first measures the best program on the training and the held-out episodes.
         if not best.heldout or simplify_until - time.monotonic() < 2 * best_took:
@@ -265,7 +265,7 @@ def finish(
             took["simplification"] = time.monotonic() - step
     best.readability = readability.report(top[0].code, best.coverage, best.simplified, best.misnamed)
     log.info("best policy's readability: %s", readability.describe(best.readability))
-    if cfg.evaluation.render:
+    if cfg.finish.render:
         step = time.monotonic()
         warming.join(max(_left(until), 0.0))
         best.media = _render(cfg, executor, heldout, top[0], run_dir, until, plan)
@@ -309,10 +309,10 @@ def _coverage(executor: Executor, evaluator: Evaluator, heldout: Evaluator, reco
 
 
 def _robustness(cfg: SearchConfig, executor: Executor, evaluator: Evaluator, record: SampleRecord, run_dir: Path, until: float) -> dict:
-    """The best policy's robustness report (`colmo.robustness`) on `evaluation.robustness_episodes`
-    held-out episodes per grid point (with `evaluation.robustness_precision`, more while they fit
+    """The best policy's robustness report (`colmo.robustness`) on `finish.robustness_episodes`
+    held-out episodes per grid point (with `finish.robustness_precision`, more while they fit
     before `until`, at the pace of those scored), saved into the run directory; the summary's `robustness`."""
-    options, started = cfg.evaluation, time.monotonic()
+    options, started = cfg.finish, time.monotonic()
 
     def may_add(scored: int, added: int) -> bool:
         return time.monotonic() + (time.monotonic() - started) * added / scored <= until

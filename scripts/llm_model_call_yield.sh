@@ -16,4 +16,4 @@ model="${MODEL:-$(python "$(dirname "$0")/fetch_test_model.py" --size 1.5b)}"
 out="${OUT:-runs/llm-model-call-yield}"
 mkdir -p "$out" && cd "$out"
 exec colmo -m "seed=${SEEDS:-0,1,2}" task=pendulum llm=llamacpp "llm.model_path=$model" executor.workers=1 search.max_samples=48 \
-  search.max_seconds=0 evaluation.render=false evaluation.simplify=false search.progress=false hydra.sweep.dir=sweep "$@"
+  search.max_seconds=0 finish.render=false finish.simplify=false search.progress=false hydra.sweep.dir=sweep "$@"

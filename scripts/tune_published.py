@@ -29,7 +29,7 @@ def run(out: Path, task: str, method: str, seed: int, budget: int) -> None:
         return
     command = [
         "colmo-optimize", f"task={task}", f"policy_file={EXAMPLES / f'paper_{task}.py'}", f"gfo={method}",
-        f"gfo.budget={budget}", f"seed={seed}", "executor.workers=1", "evaluation.episodes=100", f"hydra.run.dir={directory}",
+        f"gfo.budget={budget}", f"seed={seed}", "executor.workers=1", "heldout.episodes=100", f"hydra.run.dir={directory}",
     ]
     print(" ".join(command), flush=True)
     subprocess.run(command, check=False, stdout=subprocess.DEVNULL)

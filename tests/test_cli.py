@@ -15,11 +15,11 @@ from conftest import FakeOpenAIServer, refused
 from mlflow import MlflowClient
 
 from colmo.__main__ import main as colmo
-from colmo.cli import refusal
+from colmo.cli import refusal, renamed
 from colmo.help import help_text
 
 BIN = Path(sys.executable).parent
-TINY = ("search.max_samples=2", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false",
+TINY = ("search.max_samples=2", "gfo.budget=2", "task.episodes=1", "heldout.episodes=2", "finish.render=false", "finish.simplify=false",
         "executor.workers=1", "search.progress=false")
 # A spec whose environment cannot be built: the coordinator loads the spec (it is fine), the
 # sandboxed workers fail to make the environment when the starter is calibrated.
@@ -125,6 +125,23 @@ def test_cfg_job_prints_the_config_or_one_error_line(tmp_path, monkeypatch):
     code, line = refused(colmo, "--cfg", "job", "task=nope")
     assert code == 2 and "Could not find 'task/nope'; available: a1, ball_in_cup, cheetah, pendulum, quadruped" in line
     assert not list(tmp_path.iterdir())
+
+
+def test_renamed_keys_are_read_with_their_new_names(capsys):
+    argv = ["-m", "evaluation.episodes=5", "evaluation.render=false", "+evaluation.top=2", "~evaluation.coverage",
+            "evaluation.robustness_delays=[0,1]", "evaluation.top=1,2", "task=pendulum", "evaluations.x=1"]
+    assert renamed(argv) == ["-m", "heldout.episodes=5", "finish.render=false", "+finish.top=2", "~finish.coverage",
+                             "finish.robustness_delays=[0,1]", "finish.top=1,2", "task=pendulum", "evaluations.x=1"]
+    said = capsys.readouterr().err.splitlines()
+    assert said[0] == "colmo: evaluation.episodes is now heldout.episodes: use the new name, the old one will stop working"
+    assert len(said) == 6
+
+
+def test_an_old_key_on_the_command_line_composes_as_the_new_one(tmp_path):
+    shown = script("colmo", "--cfg", "job", "evaluation.episodes=7", "evaluation.render=false", cwd=tmp_path)
+    assert shown.returncode == 0, shown.stderr
+    assert "heldout:\n  episodes: 7\n" in shown.stdout and "  render: false\n" in shown.stdout
+    assert "colmo: evaluation.render is now finish.render" in shown.stderr
 
 
 def test_a_bad_value_is_one_line_exit_2_and_leaves_nothing(tmp_path):

@@ -177,7 +177,7 @@ def test_the_simplifier_takes_the_pruned_program_first_when_it_scores_the_same()
 def test_colmo_simplify_first_removes_the_branch_the_policy_never_took(tmp_path):
     (tmp_path / "dead.py").write_text(DEAD_BRANCH)
     result = run_colmo(
-        "colmo.simplify", "task=pendulum", "policy_file=dead.py", "task.episodes=3", "evaluation.episodes=3", "gfo=none", cwd=tmp_path,
+        "colmo.simplify", "task=pendulum", "policy_file=dead.py", "task.episodes=3", "heldout.episodes=3", "gfo=none", cwd=tmp_path,
     )
     assert result.returncode == 0, result.stderr
     simplified = last_json_line(result.stdout)

@@ -58,7 +58,7 @@ def test_search_survives_workers_killed_at_random_moments(tmp_path):
     kills = 3  # and as many retries, so that even one request killed every time is not lost
     cfg = compose(
         "search", "search.max_samples=16", "gfo.budget=6", "task.episodes=3", "tracker=none", f"executor.max_retries={kills}",
-        "executor.workers=2", "search.progress=false", "evaluation.episodes=3", "evaluation.render=false", "evaluation.simplify=false",
+        "executor.workers=2", "search.progress=false", "heldout.episodes=3", "finish.render=false", "finish.simplify=false",
     )
     search = Search(cfg, tmp_path)
     killed = []

@@ -56,7 +56,7 @@ def constants(code: str) -> list[float]:
 def test_a_time_limit_stops_tuning_in_flight_and_keeps_its_programs(tmp_path):
     # Each program would take hours to tune with this budget: only the deadline ends the run.
     run = search(
-        tmp_path, "pendulum", "gfo.budget=100000", "search.max_seconds=30", "executor.workers=2", "evaluation.episodes=5", "evaluation.top=1",
+        tmp_path, "pendulum", "gfo.budget=100000", "search.max_seconds=30", "executor.workers=2", "heldout.episodes=5", "finish.top=1",
         timeout=120,
     )
     assert run.summary["stop_reason"] == "max_seconds"
@@ -85,7 +85,7 @@ def test_each_job_of_a_sweep_searches_for_its_whole_limit(tmp_path):
     its own start, not the process's (it used to find no time left and search 0 samples)."""
     result = run_colmo(
         "colmo", "-m", "seed=0,1", "search.max_seconds=30", "tracker=none", "search.progress=false", "task.episodes=1",
-        "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false", "executor.workers=1", "hydra.sweep.dir=sweep",
+        "heldout.episodes=2", "finish.render=false", "finish.simplify=false", "executor.workers=1", "hydra.sweep.dir=sweep",
         cwd=tmp_path, timeout=600,
     )
     assert result.returncode == 0, result.stderr[-3000:]
@@ -128,7 +128,7 @@ class IdleWorkers:
 def planned_budget(max_seconds: float, programs: list[int], calibration: float = 2.0) -> TimeBudget:
     """A budget planned at its start, its programs in flight read from `programs[0]`."""
     budget = TimeBudget(max_seconds, lambda: programs[0])
-    cfg = compose("search", "task=pendulum", f"search.max_seconds={max_seconds}", "evaluation.render=false", "evaluation.simplify=false")
+    cfg = compose("search", "task=pendulum", f"search.max_seconds={max_seconds}", "finish.render=false", "finish.simplify=false")
     budget.plan(cfg, (calibration / 2, calibration / 2), program_seconds=1.0, executor=IdleWorkers())
     return budget
 
@@ -223,7 +223,7 @@ def test_a_model_bound_estimate_says_what_the_calls_take_and_when_the_time_limit
 
 
 def test_a_starter_with_nothing_to_tune_leaves_the_first_estimate_to_the_samples(caplog):
-    cfg = compose("search", "task=quadruped", "evaluation.render=false")
+    cfg = compose("search", "task=quadruped", "finish.render=false")
     budget = TimeBudget(0.0)
     with caplog.at_level(logging.INFO, logger="colmo.search"):
         budget.plan(cfg, (1.0, 1.0), program_seconds=0.0, executor=IdleWorkers())

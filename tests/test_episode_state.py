@@ -135,7 +135,7 @@ def test_colmo_optimize_scores_the_counter_alike_with_any_worker_count(tmp_path)
     policy.write_text(COUNTER)
     summaries = []
     for workers in (1, 3):
-        run = run_colmo("colmo.optimize", "task=pendulum", f"policy_file={policy}", "gfo=none", "evaluation.episodes=2", f"executor.workers={workers}", cwd=tmp_path)
+        run = run_colmo("colmo.optimize", "task=pendulum", f"policy_file={policy}", "gfo=none", "heldout.episodes=2", f"executor.workers={workers}", cwd=tmp_path)
         assert run.returncode == 0, run.stderr
         summaries.append(last_json_line(run.stdout))
     assert all(summary["failure"] is None and summary["episodes"] == 10 for summary in summaries), summaries

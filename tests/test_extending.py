@@ -57,7 +57,7 @@ def site(tmp_path_factory) -> Path:
 def test_the_pages_method_runs_from_the_command_line_with_its_own_option(site, tmp_path, examples):
     result = run(
         site, tmp_path, f"policy_file={examples / 'pendulum_mistuned.py'}", "gfo=random_search", "gfo.spread=0.5", "gfo.budget=12",
-        "task.episodes=2", "evaluation.episodes=2", "executor.workers=2",
+        "task.episodes=2", "heldout.episodes=2", "executor.workers=2",
     )
     assert result.returncode == 0, result.stderr
     summary = last_json_line(result.stdout)

@@ -28,7 +28,7 @@ from colmo.__main__ import main as colmo
 from colmo.record import Summary
 from colmo.search import Search
 
-TINY = ("task.episodes=2", "tracker=none", "executor.workers=2", "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false")
+TINY = ("task.episodes=2", "tracker=none", "executor.workers=2", "search.progress=false", "heldout.episodes=2", "finish.render=false", "finish.simplify=false")
 # Programs that tune long enough to be caught in flight: two batches of 4 are tuned together,
 # 320 evaluations (20 s on 2 loaded cores); the starter's tuning before them, 40.
 SLOW = ("gfo.budget=40", "llm.batch_size=4")

@@ -417,7 +417,7 @@ def test_base_url_on_the_command_line_as_one_url_or_a_list(tmp_path, server, bas
     result = run_colmo(
         "colmo", "task=pendulum", "llm=openai", f"llm.base_url={base_url.format(url=server.url)}", "llm.model=test-model",
         "llm.batch_size=2", "search.max_samples=2", "gfo=none", "task.episodes=1", "executor.workers=1", "tracker=none",
-        "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false",
+        "search.progress=false", "heldout.episodes=2", "finish.render=false", "finish.simplify=false",
         f"hydra.run.dir={tmp_path}", cwd=tmp_path,
     )
     assert result.returncode == 0, result.stderr

@@ -24,7 +24,7 @@ def test_failing_servers_are_retried_then_the_search_stops_cleanly(tmp_path, cap
             "search", "llm=openai", f"llm.base_url=[{server.url},{dead_url}]", "llm.model=test-model",
             "llm.batch_size=2", "llm.max_retries=2", "llm.backoff_s=0.01", "llm.max_backoff_s=0.05",
             "llm.timeout_s=1", "llm.max_consecutive_failures=8", "search.max_samples=50",
-            "gfo.budget=3", "task.episodes=1", "tracker=none", "executor.workers=1", "search.progress=false", "evaluation.render=false", "evaluation.simplify=false",
+            "gfo.budget=3", "task.episodes=1", "tracker=none", "executor.workers=1", "search.progress=false", "finish.render=false", "finish.simplify=false",
         )
         with caplog.at_level(logging.WARNING, logger="colmo.generate"):
             summary = Search(cfg, tmp_path).run()

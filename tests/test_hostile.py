@@ -460,7 +460,7 @@ def test_a_search_flooded_with_hostile_programs_keeps_running_and_improving(tmp_
     tmp = tmp_path / "tmp"
     tmp.mkdir()
     monkeypatch.setattr(tempfile, "tempdir", str(tmp))
-    cfg = compose("search", "task.episodes=1", "search.max_samples=24", "llm.batch_size=4", "gfo.budget=8", "tracker=none", "executor.workers=1", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false")
+    cfg = compose("search", "task.episodes=1", "search.max_samples=24", "llm.batch_size=4", "gfo.budget=8", "tracker=none", "executor.workers=1", "heldout.episodes=2", "finish.render=false", "finish.simplify=false")
     generator = HostileGenerator(MutateGenerator(cfg.llm, cfg.seed), cfg.seed, canary)
     summary = Search(cfg, tmp_path / "run", generator=generator).run()
 
@@ -659,8 +659,8 @@ def test_a_forged_score_is_never_stored_nor_tracked_not_even_after_a_resume(tmp_
     run_dir = tmp_path / "run"
     common = (
         f"task.spec={escaped_spec}", "task.episodes=2", "gfo.budget=4", "llm.batch_size=1", "search.queue_size=1",
-        "search.duplicate_retries=0", "executor.workers=1", "tracker=none", "search.progress=false", "evaluation.episodes=2",
-        "evaluation.render=false", "evaluation.simplify=false",
+        "search.duplicate_retries=0", "executor.workers=1", "tracker=none", "search.progress=false", "heldout.episodes=2",
+        "finish.render=false", "finish.simplify=false",
     )  # fmt: skip
     forgers = [forging_answer(score, 2) for score in FORGED_SCORES] + [forging_answer(FORGED_SCORES[0], 1)]
     first = tracked_search(compose("search", "search.max_samples=3", *common), run_dir, uri, forgers)

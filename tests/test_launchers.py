@@ -9,7 +9,7 @@ import pytest
 from conftest import run_colmo
 from mlflow import MlflowClient
 
-TINY = ("search.max_samples=2", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false",
+TINY = ("search.max_samples=2", "gfo.budget=2", "task.episodes=1", "heldout.episodes=2", "finish.render=false", "finish.simplify=false",
         "executor.workers=1", "search.progress=false")
 
 

@@ -33,7 +33,7 @@ FETCH = "python scripts/fetch_test_model.py"
 # measured, about half its answers to these prompts are new structures, so with 8 and 6
 # samples at least one is evaluated but in about 1 run in 100.
 SEARCH = (
-    "task=pendulum", "task.episodes=2", "gfo.budget=4", "executor.workers=1", "tracker=none", "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false",
+    "task=pendulum", "task.episodes=2", "gfo.budget=4", "executor.workers=1", "tracker=none", "search.progress=false", "heldout.episodes=2", "finish.render=false", "finish.simplify=false",
     "llm.batch_size=2", "llm.max_tokens=384",
 )
 

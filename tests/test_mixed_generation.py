@@ -14,8 +14,8 @@ from colmo.__main__ import main as colmo
 from colmo.generate import Generation, Generator
 from colmo.search import Search
 
-TINY = ("gfo.budget=4", "task.episodes=2", "tracker=none", "executor.workers=2", "search.progress=false", "evaluation.episodes=2",
-        "evaluation.render=false", "evaluation.simplify=false")
+TINY = ("gfo.budget=4", "task.episodes=2", "tracker=none", "executor.workers=2", "search.progress=false", "heldout.episodes=2",
+        "finish.render=false", "finish.simplify=false")
 ANSWERS = [f"import numpy as np\n\ndef policy(obs):\n    return {k}.0 * obs[2] - np.sin(obs[{k % 2}])\n" for k in range(1, 50)]
 
 

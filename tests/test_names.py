@@ -110,7 +110,7 @@ def test_the_simplified_policy_takes_the_spec_s_names(tmp_path):
         "    if angle < 0.0:\n        return 1.0 if omega > 0.0 else -1.0\n    return -10.0 * sin_theta - 1.0 * omega\n"
     )
     result = run_colmo(
-        "colmo.simplify", f"policy_file={policy_file}", "task=pendulum", "task.episodes=2", "evaluation.episodes=2", "gfo=none",
+        "colmo.simplify", f"policy_file={policy_file}", "task=pendulum", "task.episodes=2", "heldout.episodes=2", "gfo=none",
         "simplify.tolerance=0.0", "executor.workers=2", cwd=tmp_path,
     )
     assert result.returncode == 0, result.stderr

@@ -23,7 +23,7 @@ This should swing the pendulum up faster.
 
 
 def optimize(tmp_path, *overrides):
-    return run_colmo("colmo.optimize", *overrides, "executor.workers=2", "evaluation.episodes=10", cwd=tmp_path)
+    return run_colmo("colmo.optimize", *overrides, "executor.workers=2", "heldout.episodes=10", cwd=tmp_path)
 
 
 def test_mistuned_policy_gains_100_points_with_oneplusone(tmp_path, examples):

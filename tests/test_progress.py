@@ -272,8 +272,8 @@ def test_recorded_terminal_session(tmp_path):
     # scores under the display (no video or simplification: they log the same way, slower).
     args = [
         "task=pendulum", "tracker=none", "seed=0", "gfo.budget=20", "search.max_samples=6", "llm.batch_size=2",
-        "search.queue_size=1", "executor.workers=2", "evaluation.episodes=5", "evaluation.top=1",
-        "evaluation.render=false", "evaluation.simplify=false",
+        "search.queue_size=1", "executor.workers=2", "heldout.episodes=5", "finish.top=1",
+        "finish.render=false", "finish.simplify=false",
     ]
     session = record_session(args, tmp_path)
 

@@ -82,7 +82,7 @@ def test_a_spec_file_on_the_public_api_runs_a_search(tmp_path):
     (tmp_path / "swingup.py").write_text(SPEC)
     run = subprocess.run(
         [sys.executable, "-m", "colmo", f"task.spec={tmp_path / 'swingup.py'}", "search.max_samples=3", "gfo.budget=3", "task.episodes=2",
-         "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false", "executor.workers=1", "search.progress=false",
+         "heldout.episodes=2", "finish.render=false", "finish.simplify=false", "executor.workers=1", "search.progress=false",
          "tracker=none", "hydra.run.dir=run"],
         cwd=tmp_path, capture_output=True, text=True, timeout=600,
     )

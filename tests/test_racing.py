@@ -173,7 +173,7 @@ def test_an_evaluation_spread_over_workers_reports_their_time(pendulum):
 @pytest.mark.slow
 def test_colmo_optimize_reports_the_steps_simulated(tmp_path):
     """tests/test_optimize_cli.py checks the same figures on its oneplusone (racing) and bo (no racing) runs."""
-    common = (f"policy_file={EXAMPLES / 'pendulum_mistuned.py'}", "gfo.budget=10", "task.episodes=3", "evaluation.episodes=3", "executor.workers=2")
+    common = (f"policy_file={EXAMPLES / 'pendulum_mistuned.py'}", "gfo.budget=10", "task.episodes=3", "heldout.episodes=3", "executor.workers=2")
     off = run_colmo("colmo.optimize", *common, "gfo.racing=false", cwd=tmp_path)
     on = run_colmo("colmo.optimize", *common, cwd=tmp_path)  # racing: on by default for the (1+1)-ES
     assert off.returncode == 0 and on.returncode == 0, off.stderr + on.stderr

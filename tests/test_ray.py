@@ -25,7 +25,7 @@ from colmo.specs import load_spec
 
 requires_ray = pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="Ray is not installed: pip install 'colmo[ray]'")
 
-TINY = ("search.max_samples=8", "gfo.budget=4", "task.episodes=2", "tracker=none", "seed=3", "executor.workers=2", "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false")
+TINY = ("search.max_samples=8", "gfo.budget=4", "task.episodes=2", "tracker=none", "seed=3", "executor.workers=2", "search.progress=false", "heldout.episodes=2", "finish.render=false", "finish.simplify=false")
 
 
 @pytest.fixture(scope="module")

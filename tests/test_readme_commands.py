@@ -63,8 +63,8 @@ def test_every_command_on_the_pages_is_accepted_as_written(line, laid_out, tmp_p
     if "<run>" in line:  # a run with the settings the command has (what resuming checks), short: its directory as colmo names it
         from conftest import run_colmo
 
-        first = run_colmo("colmo", "task=pendulum", "search.max_samples=1", "evaluation.render=false", "evaluation.simplify=false",
-                          "evaluation.episodes=2", "tracker=none", "search.progress=false", cwd=laid_out)
+        first = run_colmo("colmo", "task=pendulum", "search.max_samples=1", "finish.render=false", "finish.simplify=false",
+                          "heldout.episodes=2", "tracker=none", "search.progress=false", cwd=laid_out)
         assert first.returncode == 0, first.stderr
         line = line.replace("outputs/pendulum/<run>", str(next(laid_out.glob("outputs/pendulum/*")).relative_to(laid_out)))
     if "$(python scripts/fetch_test_model.py)" in line or "llm.model_path=..." in line:

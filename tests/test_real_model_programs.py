@@ -34,7 +34,7 @@ def test_the_simplified_real_model_program_does_what_it_reads_as(tmp_path, progr
     original = tmp_path / "policy.py"
     original.write_text(program["code"])
     simplified = run_colmo(
-        "colmo.simplify", f"policy_file={original}", "task=pendulum", "task.episodes=4", "evaluation.episodes=4", "gfo=none",
+        "colmo.simplify", f"policy_file={original}", "task=pendulum", "task.episodes=4", "heldout.episodes=4", "gfo=none",
         "executor.workers=2", cwd=tmp_path,
     )
     assert simplified.returncode == 0, simplified.stderr

@@ -1,5 +1,5 @@
 """Model mismatch (`task.perturb`) and the robustness report of `colmo-evaluate robustness=true` and of
-a search's finish (`evaluation.robustness`)."""
+a search's finish (`finish.robustness`)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 from conftest import compose, last_json_line, run_colmo
 from mlflow import MlflowClient
 
-from colmo.config import HeldoutConfig, PerturbConfig
+from colmo.config import FinishConfig, PerturbConfig
 from colmo.environments.perturb import PerturbedEnvironment, with_perturbation
 from colmo.errors import ConfigError
 from colmo.finish import RefereeCost, plan_finish
@@ -114,10 +114,10 @@ def test_out_of_range_magnitudes_are_configuration_errors():
         PerturbConfig(mass=1.0)
     with pytest.raises(ConfigError, match="task.perturb.delay"):
         PerturbConfig(delay=-1)
-    with pytest.raises(ConfigError, match=r"evaluation.robustness_magnitudes must lie in \(0, 1\), got \[1.5\]"):
-        HeldoutConfig(robustness_magnitudes=[1.5])
-    with pytest.raises(ConfigError, match="evaluation.robustness_episodes must be >= 1"):
-        HeldoutConfig(robustness_episodes=0)
+    with pytest.raises(ConfigError, match=r"finish.robustness_magnitudes must lie in \(0, 1\), got \[1.5\]"):
+        FinishConfig(robustness_magnitudes=[1.5])
+    with pytest.raises(ConfigError, match="finish.robustness_episodes must be >= 1"):
+        FinishConfig(robustness_episodes=0)
 
 
 def test_colmo_evaluate_robustness_reports_each_magnitude_nominal_first_and_repeats(tmp_path, examples):
@@ -165,10 +165,10 @@ def test_each_point_has_its_interval_and_its_paired_change_from_nominal():
 
 
 def test_the_finish_plans_the_robustness_report_whole_or_not_at_all():
-    grid = ("evaluation.robustness_magnitudes=[0.1,0.2]", "evaluation.robustness_delays=[1]", "evaluation.robustness_episodes=3")
-    quiet = ("evaluation.simplify=false", "evaluation.render=false", "evaluation.top=1", "evaluation.episodes=2")
+    grid = ("finish.robustness_magnitudes=[0.1,0.2]", "finish.robustness_delays=[1]", "finish.robustness_episodes=3")
+    quiet = ("finish.simplify=false", "finish.render=false", "finish.top=1", "heldout.episodes=2")
     assert plan_finish(compose("search", *quiet, *grid), RefereeCost(1.0, 0.0), 2).robustness_seconds == 0  # off by default
-    on = compose("search", *quiet, *grid, "evaluation.robustness=true")
+    on = compose("search", *quiet, *grid, "finish.robustness=true")
     full = plan_finish(on, RefereeCost(1.0, 0.0), 2)
     # 1 + 8 x 2 + 1 = 18 points of 3 episodes on 2 workers (2 rounds), each episode 1.5 s on a loaded machine
     assert full.robustness_seconds == pytest.approx(18 * 2 * 1.5) and full.seconds == pytest.approx(full.heldout_seconds + 54)
@@ -177,20 +177,20 @@ def test_the_finish_plans_the_robustness_report_whole_or_not_at_all():
     assert short.reduced and short.robustness_seconds == 0 and "no robustness report" in short.describe(on)
     # Short of time, the report keeps its whole cost where that fits in an equal share (here a half: held-out,
     # robustness), and the held-out scores of 3 programs over 100 episodes (225 s) get the rest.
-    heavy = compose("search", *quiet, *grid, "evaluation.robustness=true", "evaluation.top=3", "evaluation.episodes=100")
+    heavy = compose("search", *quiet, *grid, "finish.robustness=true", "finish.top=3", "heldout.episodes=100")
     kept = plan_finish(heavy, RefereeCost(1.0, 0.0), 2, available=110.0)
     assert kept.reduced and kept.robustness_seconds == 54 and kept.seconds <= 110
     assert plan_finish(heavy, RefereeCost(1.0, 0.0), 2, available=100.0).robustness_seconds == 0
 
 
-def test_a_search_with_evaluation_robustness_saves_and_logs_its_best_policys_report(tmp_path):
+def test_a_search_with_finish_robustness_saves_and_logs_its_best_policys_report(tmp_path):
     run = run_colmo(
         "colmo", "task=pendulum", "search.max_samples=2", "llm.batch_size=2", "gfo=none", "task.episodes=1",
-        "evaluation.episodes=1", "evaluation.top=1", "evaluation.render=false", "evaluation.simplify=false",
-        "executor.workers=1", "search.progress=false", "evaluation.robustness=true", "evaluation.robustness_episodes=2",
+        "heldout.episodes=1", "finish.top=1", "finish.render=false", "finish.simplify=false",
+        "executor.workers=1", "search.progress=false", "finish.robustness=true", "finish.robustness_episodes=2",
         # A precision no 4 episodes reach: the report doubles its episodes once, to the cap.
-        "evaluation.robustness_precision=0.0001", "evaluation.robustness_max_episodes=4",
-        "evaluation.robustness_magnitudes=[0.1]", "evaluation.robustness_delays=[]", f"hydra.run.dir={tmp_path / 'run'}",
+        "finish.robustness_precision=0.0001", "finish.robustness_max_episodes=4",
+        "finish.robustness_magnitudes=[0.1]", "finish.robustness_delays=[]", f"hydra.run.dir={tmp_path / 'run'}",
         cwd=tmp_path, timeout=600,
     )
     assert run.returncode == 0, run.stderr[-2000:]

@@ -18,7 +18,7 @@ from colmo.record import SampleRecord
 from colmo.search import Search
 from colmo.store import ProgramStore
 
-TINY = ("gfo.budget=4", "task.episodes=2", "tracker=none", "executor.workers=2", "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false")
+TINY = ("gfo.budget=4", "task.episodes=2", "tracker=none", "executor.workers=2", "search.progress=false", "heldout.episodes=2", "finish.render=false", "finish.simplify=false")
 
 
 def store_rows(run_dir):
@@ -161,7 +161,7 @@ def test_children_of_the_starter_name_it_as_their_parent(finished_run):
 def test_default_search_swings_the_pendulum_up(tmp_path):
     """Search quality, end to end: the embedded generator without GFO passes the task's target
     score (400) within 600 samples (measured: first at sample 240 of a 10-minute run)."""
-    cfg = compose("search", "gfo=none", "search.max_samples=600", "search.stop_at_score=400", "tracker=none", "search.progress=false", "evaluation.render=false", "evaluation.simplify=false")
+    cfg = compose("search", "gfo=none", "search.max_samples=600", "search.stop_at_score=400", "tracker=none", "search.progress=false", "finish.render=false", "finish.simplify=false")
     summary = Search(cfg, tmp_path).run()
     assert summary.best_score >= 400, summary.best_so_far
     assert summary.stop_reason == "stop_at_score"

@@ -665,7 +665,7 @@ def test_the_command_line_simplifies_a_policy_file(tmp_path):
     policy_file.write_text(DEAD_CODE_POLICY)
     result = run_colmo(
         "colmo.simplify", f"policy_file={policy_file}", "task=pendulum", "+task.env.horizon=200", "task.episodes=2",
-        "evaluation.episodes=2", "gfo.budget=6", "executor.workers=2", "simplify.tolerance=0.01", cwd=tmp_path,
+        "heldout.episodes=2", "gfo.budget=6", "executor.workers=2", "simplify.tolerance=0.01", cwd=tmp_path,
     )
     assert result.returncode == 0, result.stderr
     summary = last_json_line(result.stdout)
@@ -688,7 +688,7 @@ def test_the_command_line_config_composes_and_checks_the_tolerance():
 
     importlib.import_module("colmo.simplify.__main__")  # registers the command's root schema
     cfg = compose("simplify", "policy_file=p.py", "task=cheetah", "gfo=none", "simplify.tolerance=0.05")
-    assert (cfg.task.name, cfg.gfo.method, cfg.simplify.tolerance, cfg.evaluation.episodes) == ("cheetah", "none", 0.05, 100)
+    assert (cfg.task.name, cfg.gfo.method, cfg.simplify.tolerance, cfg.heldout.episodes) == ("cheetah", "none", 0.05, 100)
     with pytest.raises(ConfigError, match=r"simplify.tolerance must be in \[0, 1\), got 1.5"):
         compose("simplify", "policy_file=p.py", "simplify.tolerance=1.5")
 
@@ -728,7 +728,7 @@ def _simplifying(tmp_path, statements: int):
     policy_file = tmp_path / "policy.py"
     policy_file.write_text(chained_assignments(statements))
     process = start_colmo(
-        "colmo.simplify", f"policy_file={policy_file}", "task=pendulum", "task.episodes=2", "evaluation.episodes=2", "executor.workers=2",
+        "colmo.simplify", f"policy_file={policy_file}", "task=pendulum", "task.episodes=2", "heldout.episodes=2", "executor.workers=2",
         cwd=tmp_path, env={**os.environ, "TMPDIR": str(tmp_path / "tmp")},
     )
     for line in process.stderr:

@@ -14,8 +14,8 @@ from mlflow import MlflowClient
 
 from colmo.sweep_comparison import JobOutcome, comparison_lines, failure_line
 
-TINY = ("llm=mutate", "search.max_samples=2", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2", "evaluation.render=false",
-        "evaluation.simplify=false", "executor.workers=1", "search.progress=false")
+TINY = ("llm=mutate", "search.max_samples=2", "gfo.budget=2", "task.episodes=1", "heldout.episodes=2", "finish.render=false",
+        "finish.simplify=false", "executor.workers=1", "search.progress=false")
 
 
 def test_a_sweep_ends_with_one_line_per_job_and_the_command_of_its_report(tmp_path):

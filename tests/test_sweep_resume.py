@@ -11,8 +11,8 @@ from conftest import wait_for
 
 from colmo.store import SUMMARY_FILE, holds_run
 
-SWEEP = ("-m", "seed=0,1", "llm=mutate", "search.max_samples=40", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2",
-         "evaluation.render=false", "evaluation.simplify=false", "executor.workers=1", "search.progress=false", "tracker=none",
+SWEEP = ("-m", "seed=0,1", "llm=mutate", "search.max_samples=40", "gfo.budget=2", "task.episodes=1", "heldout.episodes=2",
+         "finish.render=false", "finish.simplify=false", "executor.workers=1", "search.progress=false", "tracker=none",
          "hydra.sweep.dir=sweep")
 
 

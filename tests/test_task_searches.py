@@ -26,7 +26,7 @@ def test_short_search_beats_the_starter(tmp_path, task, episodes):
         pytest.skip("the Unitree A1 model needs MENAGERIE_ROOT (offline Menagerie tree) on this machine")
     cfg = compose(
         "search", f"task={task}", "gfo=oneplusone", "gfo.budget=6", f"task.episodes={episodes}",
-        "search.max_samples=12", "tracker=none", "executor.workers=2", "search.progress=false", "evaluation.episodes=2", "evaluation.render=false", "evaluation.simplify=false",
+        "search.max_samples=12", "tracker=none", "executor.workers=2", "search.progress=false", "heldout.episodes=2", "finish.render=false", "finish.simplify=false",
     )
     summary = Search(cfg, tmp_path).run()
     store = ProgramStore(tmp_path / "programs.db")

@@ -38,7 +38,7 @@ from colmo.track import (
 
 # Small, with the whole finish (simplification, video and plot) that a run logs at its end.
 TINY = (
-    "search.max_samples=4", "llm.batch_size=2", "gfo.budget=2", "task.episodes=1", "evaluation.episodes=2",
+    "search.max_samples=4", "llm.batch_size=2", "gfo.budget=2", "task.episodes=1", "heldout.episodes=2",
     "executor.workers=1", "search.progress=false",
 )
 # The run list's columns a person compares runs by.
@@ -262,7 +262,7 @@ def test_colmo_optimize_logs_one_run(sweep, examples):
     cwd, client, _, _ = sweep  # its store, in an experiment of its own
     result = subprocess.run(
         [sys.executable, "-m", "colmo.optimize", f"policy_file={examples / 'pendulum_mistuned.py'}", "tracker=mlflow",
-         "tracker.experiment=optimize", "gfo.budget=3", "task.episodes=1", "evaluation.episodes=2", "executor.workers=1",
+         "tracker.experiment=optimize", "gfo.budget=3", "task.episodes=1", "heldout.episodes=2", "executor.workers=1",
          "hydra.run.dir=optimized"],
         cwd=cwd, capture_output=True, text=True, timeout=300,
     )

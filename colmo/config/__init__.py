@@ -10,7 +10,7 @@ per kind (`gfo=bo` has a sampler, `executor=ray` an address, `llm=openai` a serv
 
 One module per concern: `fields` (documented fields and checks), `task`, `components` (the
 groups that pick a component: `gfo`, `executor`, `tracker`), `generators` (`llm`), `search`
-(database, search loop, held-out evaluation, simplifier) and `apps` (each app's root schema).
+(database, search loop, held-out scores, the search's finish, simplifier) and `apps` (each app's root schema).
 """
 
 from colmo.config.apps import (
@@ -40,7 +40,7 @@ from colmo.config.generators import (
     OpenAIConfig,
     VLLMConfig,
 )
-from colmo.config.search import DatabaseConfig, HeldoutConfig, SearchLoopConfig, SimplifyConfig
+from colmo.config.search import DatabaseConfig, FinishConfig, HeldoutConfig, SearchLoopConfig, SimplifyConfig
 from colmo.config.task import PerturbConfig, TaskConfig
 
 __all__ = [
@@ -49,6 +49,7 @@ __all__ = [
     "DatabaseConfig",
     "EvaluateConfig",
     "ExecutorConfig",
+    "FinishConfig",
     "GFOConfig",
     "GeneratorConfig",
     "HeldoutConfig",

@@ -10,7 +10,7 @@ from omegaconf import MISSING
 from colmo.config.components import ExecutorConfig, GFOConfig, TrackerConfig
 from colmo.config.fields import option, require
 from colmo.config.generators import GeneratorConfig
-from colmo.config.search import DatabaseConfig, HeldoutConfig, SearchLoopConfig, SimplifyConfig
+from colmo.config.search import DatabaseConfig, FinishConfig, HeldoutConfig, SearchLoopConfig, SimplifyConfig
 from colmo.config.task import MAX_EPISODES_HELP, PRECISION_HELP, ROBUSTNESS_DELAYS, ROBUSTNESS_MAGNITUDES, TaskConfig, check_robustness_grid
 
 
@@ -25,7 +25,8 @@ class SearchConfig:
     executor: ExecutorConfig = MISSING
     tracker: TrackerConfig = MISSING
     search: SearchLoopConfig = field(default_factory=SearchLoopConfig)
-    evaluation: HeldoutConfig = field(default_factory=HeldoutConfig)
+    heldout: HeldoutConfig = field(default_factory=HeldoutConfig)
+    finish: FinishConfig = field(default_factory=FinishConfig)
     simplify: SimplifyConfig = field(default_factory=SimplifyConfig)
     seed: int = option(0, "episode seeds, prompts and optimizers derive from it")
     resume: Optional[str] = option(None, "an earlier run's directory to continue")
@@ -57,7 +58,7 @@ class OptimizeConfig(PolicyFileConfig):
 
     gfo: GFOConfig = MISSING
     tracker: TrackerConfig = MISSING
-    evaluation: HeldoutConfig = field(default_factory=HeldoutConfig)
+    heldout: HeldoutConfig = field(default_factory=HeldoutConfig)
 
 
 @dataclass
@@ -93,7 +94,7 @@ class SimplifyAppConfig(PolicyFileConfig):
 
     gfo: GFOConfig = MISSING
     simplify: SimplifyConfig = field(default_factory=SimplifyConfig)
-    evaluation: HeldoutConfig = field(default_factory=HeldoutConfig)
+    heldout: HeldoutConfig = field(default_factory=HeldoutConfig)
 
 
 @dataclass

@@ -1,5 +1,6 @@
 """The schemas of the search's own config groups: the programs database, the search loop's
-limits, the held-out evaluation at its end (`evaluation`) and the simplifier (`simplify`)."""
+limits, the held-out scores (`heldout`), what the search does at its end (`finish`) and the
+simplifier (`simplify`)."""
 
 from __future__ import annotations
 
@@ -42,18 +43,27 @@ class DatabaseConfig:
 
 @dataclass
 class HeldoutConfig:
-    """Held-out evaluation: fresh episodes, their seeds disjoint from the training ones."""
+    """Held-out scores: fresh episodes, their seeds disjoint from the training ones."""
 
     episodes: int = option(100, "held-out episodes per score")
-    top: int = option(3, "the best programs of a search that get a held-out score at its end")
-    render: bool = option(True, "at the end of a search, a video and a plot of the best policy on a held-out episode")
-    simplify: bool = option(True, "at the end of a search, the best policy simplified (simplified_policy.py; options: simplify.*)")
+
+    def __post_init__(self) -> None:
+        at_least(self, "heldout", episodes=1)
+
+
+@dataclass
+class FinishConfig:
+    """The end of a search (`colmo.finish`): which programs get a held-out score, and what is
+    made of the best one."""
+
+    top: int = option(3, "the best programs of a search that get a held-out score (over heldout.episodes) at its end")
+    render: bool = option(True, "a video and a plot of the best policy on a held-out episode")
+    simplify: bool = option(True, "the best policy simplified (simplified_policy.py; options: simplify.*)")
     robustness: bool = option(
-        False, "at the end of a search, the best policy scored over a grid of model-mismatch magnitudes (robustness.json/.csv/.png; colmo.robustness)",
+        False, "the best policy scored over a grid of model-mismatch magnitudes (robustness.json/.csv/.png; colmo.robustness)",
     )
     coverage: bool = option(
-        True, "at the end of a search, what each branch of the best policy did over the training and held-out episodes "
-        "(comments in best_policy.py; colmo.coverage)",
+        True, "what each branch of the best policy did over the training and held-out episodes (comments in best_policy.py; colmo.coverage)",
     )
     robustness_episodes: int = option(3, "held-out episodes per robustness grid point")
     robustness_precision: Optional[float] = option(None, PRECISION_HELP + " (more only where the finish's time allows)")
@@ -62,9 +72,9 @@ class HeldoutConfig:
     robustness_delays: list[int] = option(ROBUSTNESS_DELAYS, "control delays (steps) of the robustness grid")
 
     def __post_init__(self) -> None:
-        at_least(self, "evaluation", episodes=1, top=1)
+        at_least(self, "finish", top=1)
         check_robustness_grid(
-            "evaluation.", self.robustness_episodes, self.robustness_magnitudes, self.robustness_delays, self.robustness_precision,
+            "finish.", self.robustness_episodes, self.robustness_magnitudes, self.robustness_delays, self.robustness_precision,
             self.robustness_max_episodes,
         )
 

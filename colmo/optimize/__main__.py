@@ -40,7 +40,7 @@ def main(cfg: OptimizeConfig) -> None:
         result = optimize_program(program, CandidateEvaluator(executor, evaluator, program.skeleton, chunks), cfg.gfo, cfg.seed)
         heldout = None
         if not result.failure:
-            heldout = heldout_score(executor, session.heldout(cfg.evaluation.episodes), program.skeleton, result.params)
+            heldout = heldout_score(executor, session.heldout(cfg.heldout.episodes), program.skeleton, result.params)
 
     print(f"score with its own constants: {result.initial.score:.2f}" + (f" (failed: {result.initial.failure})" if result.initial.failure else ""))
     heldout_value = finite_or_none(heldout.score) if heldout else None
@@ -48,12 +48,12 @@ def main(cfg: OptimizeConfig) -> None:
         print(f"tuned policy ({result.evaluations} evaluations, {result.steps:,} control steps, {result.seconds:.1f} s):\n")
         print(result.code)
         heldout_text = f"{heldout_value:.2f}" if heldout_value is not None else f"failed ({heldout.failure})"
-        print(f"score: {result.score:.2f} (training, {len(evaluator.seeds)} episodes); held-out: {heldout_text} ({cfg.evaluation.episodes} episodes)")
+        print(f"score: {result.score:.2f} (training, {len(evaluator.seeds)} episodes); held-out: {heldout_text} ({cfg.heldout.episodes} episodes)")
     summary = {
         "score_initial": finite_or_none(result.initial.score), "score": finite_or_none(result.score), "heldout_score": heldout_value,
         "n_params": program.n_params, "evaluations": result.evaluations, "steps": result.steps, "raced_out": result.raced_out,
         "seconds": round(result.seconds, 3), "gfo": cfg.gfo.method, "task": cfg.task.name, "episodes": len(evaluator.seeds),
-        "heldout_episodes": cfg.evaluation.episodes, "returns": list(result.evaluation.returns), "params": list(result.params),
+        "heldout_episodes": cfg.heldout.episodes, "returns": list(result.evaluation.returns), "params": list(result.params),
         "failure": result.failure, "code": result.code,
     }
     header = f"# tuned by colmo-optimize (gfo={cfg.gfo.method}): training score {result.score:.2f}"

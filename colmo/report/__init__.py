@@ -116,7 +116,7 @@ def write_report(
         f"with `{command or 'colmo-report'}`; {count} count, {len(reading.left_out)} left out (listed below: "
         "runs that did not finish, and repeats: of runs with the same settings and seed, the latest counts).",
         "Rewards are each run's best search score (the mean return over `task.episodes` training episodes);",
-        "held-out: that best program's mean return over `evaluation.episodes` fresh episodes. Both are",
+        "held-out: that best program's mean return over `heldout.episodes` fresh episodes. Both are",
         "mean ± sample std over seeds. Samples to target: programs sampled when the best score first",
         "reached `task.target_score`, over the seeds that reached it, at batch resolution.",
         "",

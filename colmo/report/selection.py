@@ -28,8 +28,9 @@ AXES = {
     "evaluations": ("evaluations", "candidate evaluations (each over task.episodes episodes)"),
     "seconds": ("seconds", "seconds of search (wall clock)"),
 }
-# Settings that do not change what a search finds: not part of a variant.
-_IGNORED = ("tracker.", "executor.", "search.progress", "search.queue_size", "evaluation.render", "resume", "spec.")
+# Settings that do not change what a search finds: not part of a variant (`evaluation.render`:
+# `finish.render` in runs logged before its rename).
+_IGNORED = ("tracker.", "executor.", "search.progress", "search.queue_size", "finish.render", "evaluation.render", "resume", "spec.")
 _VARIANT_BASE = ("task.name", "gfo.method", "gfo.budget", "seed")
 
 

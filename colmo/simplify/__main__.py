@@ -89,7 +89,7 @@ def main(cfg: SimplifyAppConfig) -> None:
     code = extract_policy(Path(cfg.policy_file).expanduser().read_text(errors="replace"))
     interruption = _Interruption()
     with stop_signals(interruption), policy_session(cfg) as session:
-        evaluator, heldout = session.evaluator, session.heldout(cfg.evaluation.episodes)
+        evaluator, heldout = session.evaluator, session.heldout(cfg.heldout.episodes)
         log.info(
             "%s: simplifying with tolerance %g on %d training and %d held-out episodes, gfo=%s",
             cfg.policy_file, cfg.simplify.tolerance, len(evaluator.seeds), len(heldout.seeds), cfg.gfo.method,

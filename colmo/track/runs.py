@@ -15,7 +15,7 @@ What a search's run holds:
   evaluations_per_second, seconds (since the search started), ...) and `samples`, so the run
   list shows the latest of each as a column and curves can be drawn against samples,
   evaluations or seconds; at the end also `best_heldout_score` (the best program's score on
-  `evaluation.episodes` fresh episodes); each rounded to 4 significant digits, the run list's
+  `heldout.episodes` fresh episodes); each rounded to 4 significant digits, the run list's
   metrics first (`colmo.track.backend`);
 - the programs table `programs.json` and page `programs.html` (`colmo.track.programs`),
   rewritten whole at most every `table_every_s` seconds during the run and once at the end; the
@@ -27,7 +27,7 @@ What a search's run holds:
   (`MlflowClient(uri).load_table` also searches the *global* tracking URI: set it.)
 - at the end: best_policy.py, simplified_policy.py (when simplification made it), summary.json, the Hydra config files under `hydra/`, the
   best-so-far plot `best_so_far.png` (against model calls and against seconds, side by side), and the best policy's plot and video on a held-out episode
-  under `best_policy/` (when `evaluation.render` made them), with `evaluation.robustness` its robustness report
+  under `best_policy/` (when `finish.render` made them), with `finish.robustness` its robustness report
   (`robustness.json/.csv/.png` under `robustness/`, metrics `robustness_nominal`, `robustness_worst`,
   `robustness_all_10` (every factor at 10%), `robustness_failures`); status FINISHED, KILLED (interrupted) or FAILED (the
   generator failed, or the process exited without finishing the search).

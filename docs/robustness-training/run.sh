@@ -23,7 +23,7 @@ for seed in 0 1 2; do
       # shellcheck disable=SC2086
       nice -n 10 python -m colmo task=$task llm=mutate gfo=none executor.workers=1 seed=$seed \
         search.max_samples=${!samples_var} search.max_seconds=0 search.progress=false \
-        evaluation.episodes=10 evaluation.top=1 evaluation.render=false evaluation.simplify=false \
+        heldout.episodes=10 finish.top=1 finish.render=false finish.simplify=false \
         tracker=none hydra.run.dir="$out/$name" $extra > "$out/$name.search.log" 2>&1 || { echo "search $name failed"; continue; }
       echo "$(date +%T) robustness $name"
       nice -n 10 python -m colmo.evaluate task=$task policy_file="$out/$name/best_policy.py" executor.workers=1 seed=0 \
