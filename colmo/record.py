@@ -19,7 +19,7 @@ import time
 from dataclasses import asdict, astuple, dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Mapping, Optional, Protocol
 
-from colmo.generate.base import Generation
+from colmo.generate.base import Generation, PromptForm
 
 if TYPE_CHECKING:
     from colmo.optimize.tune import ProgramResult
@@ -116,9 +116,11 @@ class SampleRecord:
 
     def as_sample(self) -> Sample:
         """The generated sample this record was made from (`of`'s inverse: a resumed run evaluates it again)."""
+        # Stored as its two contexts, of which a generation has at most one.
+        form = PromptForm.COMPLETION if self.prompt_prefix else PromptForm.CHAT if self.prompt_shown else PromptForm.CODE
         generation = Generation(
-            self.raw, self.generator, self.prompt_tokens, self.completion_tokens, self.generation_seconds, self.prompt_prefix, self.model_calls,
-            self.prompt_shown,
+            self.raw, self.generator, self.prompt_tokens, self.completion_tokens, self.generation_seconds, self.model_calls, form,
+            self.prompt_prefix or self.prompt_shown,
         )
         return Sample(self.sample, self.batch, self.island, self.parent_keys, generation)
 

@@ -7,12 +7,12 @@ import dataclasses
 
 import pytest
 
-from colmo.generate import Generation
+from colmo.generate import Generation, PromptForm
 from colmo.record import DUPLICATE, EVALUATED, FAILED, INTERRUPTED, PENDING, UNUSABLE, Counters, Elapsed, Sample, SampleRecord
 
 
 def sample(index: int, calls: int = 1) -> Sample:
-    generation = Generation("def policy(obs):\n    return 0.0\n", "mutate", 10, 20 * calls, 0.5 * calls, "", calls)
+    generation = Generation("def policy(obs):\n    return 0.0\n", "mutate", 10, 20 * calls, 0.5 * calls, calls)
     return Sample(index, index // 2, 1, ("parent",), generation)
 
 
@@ -22,8 +22,22 @@ def test_a_pending_record_gives_back_the_sample_it_was_made_from():
 
 def test_a_pending_chat_answer_keeps_the_code_its_prompt_showed():
     # A resumed run reads it again, and it may call what its prompt showed.
-    made = dataclasses.replace(sample(4), generation=dataclasses.replace(sample(4).generation, shown="def policy_v0(obs):\n    return 0.0"))
+    shown = "def policy_v0(obs):\n    return 0.0"
+    made = dataclasses.replace(sample(4), generation=dataclasses.replace(sample(4).generation, form=PromptForm.CHAT, context=shown))
     assert SampleRecord.of(made, PENDING).as_sample() == made
+
+
+def test_a_pending_completion_keeps_the_prompt_it_continues():
+    prompt = "def policy_v0(obs):\n    return 0.0\n\n\ndef policy_v1(obs):\n"
+    made = dataclasses.replace(sample(5), generation=dataclasses.replace(sample(5).generation, text="    return 1.0\n", form=PromptForm.COMPLETION, context=prompt))
+    record = SampleRecord.of(made, PENDING)
+    assert (record.prompt_prefix, record.prompt_shown) == (prompt, "")
+    assert record.as_sample() == made
+
+
+def test_code_on_its_own_has_no_prompt_context():
+    with pytest.raises(ValueError, match="no prompt context"):
+        Generation("def policy(obs):\n    return 0.0\n", "mutate", context="def policy_v0(obs): ...")
 
 
 def test_totals_count_model_calls_records_by_status_and_rates():

@@ -13,7 +13,7 @@ from conftest import compose, refused, run_colmo, start_colmo
 
 from colmo import coverage
 from colmo.__main__ import main as colmo
-from colmo.generate import Generation, Generator
+from colmo.generate import Generation, Generator, PromptForm
 from colmo.record import SampleRecord
 from colmo.search import Search
 from colmo.store import ProgramStore
@@ -181,8 +181,11 @@ class ScriptedGenerator(Generator):
 
     def generate(self, prompt, n):
         self.prompts.append(prompt)
-        shown = prompt.shown_code if self.chat else ""
-        return [Generation(self.answers.pop(0), "scripted", prompt_tokens=10, completion_tokens=5, seconds=0.5, shown=shown) for _ in range(n)]
+        form, context = (PromptForm.CHAT, prompt.shown_code) if self.chat else (PromptForm.CODE, "")
+        return [
+            Generation(self.answers.pop(0), "scripted", prompt_tokens=10, completion_tokens=5, seconds=0.5, form=form, context=context)
+            for _ in range(n)
+        ]
 
 
 def scripted_search(tmp_path, answers, *overrides, chat=False):

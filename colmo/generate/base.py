@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import abc
 import dataclasses
+import enum
 import importlib
 import logging
 import random
@@ -27,6 +28,14 @@ if TYPE_CHECKING:
 logger = logging.getLogger("colmo.generate")
 
 
+class PromptForm(str, enum.Enum):
+    """What an answer is to its prompt, and so how intake reads it (`colmo.intake.read_program`)."""
+
+    CODE = "code"  # a program on its own (`mutate`, a spec's starter)
+    CHAT = "chat"  # an answer to the prompt's messages: it may call the code the prompt showed
+    COMPLETION = "completion"  # the prompt's text continued: read as one with it
+
+
 @dataclass(frozen=True)
 class Generation:
     text: str  # raw output: code from mutate, a model's whole answer otherwise
@@ -34,17 +43,30 @@ class Generation:
     prompt_tokens: int = 0
     completion_tokens: int = 0
     seconds: float = 0.0
-    prefix: str = ""  # the prompt text the raw output continues; extraction reads prefix + text
     # Model calls this answer cost: more than 1 when answers before it were duplicates, thrown
     # away and generated again (their tokens and seconds are counted in the fields above).
     calls: int = 1
-    # The code a chat answer's prompt showed (`Prompt.shown_code`), which the answer may call
-    # without copying it; empty for a completion, whose `prefix` holds it, and for `mutate`.
-    shown: str = ""
+    form: PromptForm = PromptForm.CODE
+    # What the answer is read with: the prompt text a completion continues, or the code a chat
+    # answer's prompt showed (`Prompt.shown_code`), which it may call without copying it.
+    context: str = ""
 
     def __post_init__(self) -> None:
-        for name in ("text", "prefix", "shown"):
+        object.__setattr__(self, "form", PromptForm(self.form))
+        if self.form is PromptForm.CODE and self.context:
+            raise ValueError("a generation of code on its own has no prompt context")
+        for name in ("text", "context"):
             object.__setattr__(self, name, as_text(getattr(self, name)))
+
+    @property
+    def prefix(self) -> str:
+        """The prompt text a completion continues (extraction reads prefix + text); empty otherwise."""
+        return self.context if self.form is PromptForm.COMPLETION else ""
+
+    @property
+    def shown(self) -> str:
+        """The code a chat answer's prompt showed; empty otherwise."""
+        return self.context if self.form is PromptForm.CHAT else ""
 
     def after(self, discarded: "Generation") -> "Generation":
         """This answer, charged with the calls, tokens and seconds of a discarded one before it."""
@@ -118,16 +140,14 @@ class LanguageModelGenerator(Generator):
 
     def __init__(self, cfg, seed: int, probe: Optional[Probe] = None) -> None:
         super().__init__(cfg, seed, probe)
-        self.chat = cfg.prompt_format == "chat"
+        self.form = PromptForm(cfg.prompt_format)
+        self.chat = self.form is PromptForm.CHAT
         self.follows_up = self.chat and cfg.follow_up
 
-    def prefix(self, prompt: Prompt) -> str:
-        """What an answer to `prompt` continues: nothing in the chat form, the prompt text in the completion form."""
-        return "" if self.chat else prompt.text
-
-    def shown(self, prompt: Prompt) -> str:
-        """The code an answer to `prompt` saw without continuing it: the prompt's code in the chat form."""
-        return prompt.shown_code if self.chat else ""
+    def context(self, prompt: Prompt) -> str:
+        """What an answer to `prompt` is read with (`Generation.context`): the prompt's code in the
+        chat form, its text in the completion form."""
+        return prompt.shown_code if self.chat else prompt.text
 
 
 def import_library(module: str, package: str, llm: str) -> Any:
@@ -143,15 +163,14 @@ GENERATORS: Registry[type[Generator]] = Registry("llm.name")
 
 
 def batch_of(
-    texts: Sequence[str], generator: str, prompt_tokens: int, completion_tokens: Sequence[int], seconds: float, prefix: str = "",
-    shown: str = "",
+    texts: Sequence[str], generator: str, prompt_tokens: int, completion_tokens: Sequence[int], seconds: float,
+    form: PromptForm = PromptForm.CODE, context: str = "",
 ) -> list[Generation]:
-    """The generations of one request (continuing `prefix`, for a completion; having seen
-    `shown`, for a chat answer). Its prompt is
-    counted on the first only and its time is split evenly, so that sums over generations are
-    the request's totals."""
+    """The generations of one request, each read in `form` with `context`. Its prompt is counted
+    on the first only and its time is split evenly, so that sums over generations are the
+    request's totals."""
     return [
-        Generation(text, generator, prompt_tokens if i == 0 else 0, completion, seconds / len(texts), prefix, shown=shown)
+        Generation(text, generator, prompt_tokens if i == 0 else 0, completion, seconds / len(texts), form=form, context=context)
         for i, (text, completion) in enumerate(zip(texts, completion_tokens))
     ]
 

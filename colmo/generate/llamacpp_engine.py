@@ -107,7 +107,7 @@ class LlamaCppGenerator(LanguageModelGenerator):
             "llamacpp: %d prompt + %d completion tokens, %.1fs (%.1f tokens/s)",
             prompt_tokens, completion_tokens, seconds, completion_tokens / seconds if seconds else 0.0,
         )
-        return Generation(text, self.name, prompt_tokens, completion_tokens, seconds, self.prefix(prompt), shown=self.shown(prompt))
+        return Generation(text, self.name, prompt_tokens, completion_tokens, seconds, form=self.form, context=self.context(prompt))
 
     def close(self) -> None:
         llm, self._llm = self._llm, None

@@ -268,6 +268,6 @@ class OpenAIGenerator(LanguageModelGenerator):
             server.url, len(texts), prompt_tokens, completion_tokens, seconds,
         )
         return batch_of(
-            texts, f"openai:{self.cfg.model}@{server.url}", prompt_tokens, _split(completion_tokens, len(texts)), seconds, self.prefix(prompt),
-            self.shown(prompt),
+            texts, f"openai:{self.cfg.model}@{server.url}", prompt_tokens, _split(completion_tokens, len(texts)), seconds, self.form,
+            self.context(prompt),
         )

@@ -56,7 +56,7 @@ class VLLMGenerator(LanguageModelGenerator):
             len(output.outputs), prompt_tokens, sum(completion_tokens), seconds,
         )
         texts = [completion.text for completion in output.outputs]
-        return batch_of(texts, self.name, prompt_tokens, completion_tokens, seconds, self.prefix(prompt), self.shown(prompt))
+        return batch_of(texts, self.name, prompt_tokens, completion_tokens, seconds, self.form, self.context(prompt))
 
     def close(self) -> None:
         self._llm = None  # the engine frees its GPU memory when collected
