@@ -50,3 +50,25 @@ def test_the_configuration_reference_is_colmos_help(monkeypatch):
     assert "$ colmo gfo=cma --help" in expanded and "gfo.method=cma" in expanded and "gfo.budget=100" in expanded
     reference = (DOCS / "reference" / "configuration.md").read_text()
     assert reference.count("<!-- help: ") >= 15  # every group's options and every tool, none written out
+
+
+def results_pages() -> list[str]:
+    """The pages of the site's Results section, less its summary."""
+    import yaml
+
+    nav = yaml.safe_load((ROOT / "mkdocs.yml").read_text())["nav"]
+    [results] = [entry["Results"] for entry in nav if isinstance(entry, dict) and "Results" in entry]
+    return [page for entry in results for title, page in entry.items() if title != "Summary"]
+
+
+@pytest.mark.parametrize("page", results_pages())
+def test_every_results_page_opens_with_its_question_command_and_conclusion(page):
+    # Before the page's first section: what was asked, how it was run (a date and a commit), what it showed.
+    head = re.split(r"^## ", (DOCS / page).read_text(), maxsplit=1, flags=re.MULTILINE)[0]
+    marks = [head.find(mark) for mark in ("**Question", "**Command", "**Conclusion")]
+    assert -1 not in marks and marks == sorted(marks), f"{page}: the header wants **Question, **Command(s), **Conclusion, in order"
+    assert re.search(r"\b20\d\d-\d\d-\d\d\b", head) and re.search(r"\bcommits? [0-9a-f]{7}", head), f"{page}: its header names no date or commit"
+
+
+def test_the_results_section_is_found():
+    assert "sweep-budget.md" in results_pages() and "results.md" not in results_pages()
