@@ -18,7 +18,8 @@ views and pointer arrays, unchecked keywords, forged step counts, pre-sent actio
 extraction, ioctl metadata writes, /proc reads of the coordinator, the worker and the other
 worker, and the resources the kernel counts per user (threads, POSIX timers, descriptors),
 which a child shares with the coordinator and the other worker; each one runs beside a
-well-behaved program on the other worker, which must score as it does alone.
+well-behaved program on the other worker, which must score as it does alone. Programs that keep
+state across episodes (their own, numpy's settings) score each episode as if it ran alone.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from pathlib import Path
 
 import pytest
 from test_check_attacks import ATTACK
+from test_episode_state import COUNTER, NUMPY_SETTINGS_COUNTER
 from test_hostile import ESCAPED, FORGED_REPLIES, GOOD, NOTHING, policy_doing
 
 API_KEY = "sk-coordinator-secret"
@@ -216,10 +218,10 @@ CORPUS_RUN = ENTER_MODE + textwrap.dedent(
     pendulum = str(load_spec("pendulum.py").path)
     escaped_imports = ("numpy", "math", "os", "sys", "ctypes", "socket")
 
-    def request(code, escaped=False, mode="fast", episodes=1):
+    def request(code, escaped=False, mode="fast", episodes=1, seeds=None, timeout_s=3):
         return EvalRequest(
-            escaped_spec if escaped else pendulum, (), tuple(episode_seeds(0, episodes)), code, (),
-            escaped_imports if escaped else ("numpy", "math"), mode=mode, timeout_s=3, memory_mb=512,
+            escaped_spec if escaped else pendulum, (), seeds or tuple(episode_seeds(0, episodes)), code, (),
+            escaped_imports if escaped else ("numpy", "math"), mode=mode, timeout_s=timeout_s, memory_mb=512,
         )
 
     report = {"uid": os.getuid(), "user namespaces": USER_NAMESPACES, "cases": {}}
@@ -239,6 +241,17 @@ CORPUS_RUN = ENTER_MODE + textwrap.dedent(
             report["cases"][name] = {
                 "failure": attack.failure,
                 "the program beside it unharmed": beside.failure is None and beside.returns == baseline.returns,
+            }
+        # A program that keeps state (its own, numpy's settings) across episodes: its returns in
+        # one request, fast and through the referee, and with each episode a request of its own.
+        report["stateful"] = {}
+        seeds = tuple(episode_seeds(0, 4))
+        for name, code in corpus["stateful"].items():
+            runs = executor.evaluate([request(code, seeds=seeds, timeout_s=60), request(code, mode="referee", seeds=seeds, timeout_s=60)])
+            runs += executor.evaluate([request(code, seeds=(seed,), timeout_s=60) for seed in seeds])
+            report["stateful"][name] = {
+                "failures": [run.failure for run in runs if run.failure],
+                "returns": [list(runs[0].returns), list(runs[1].returns), [value for run in runs[2:] for value in run.returns]],
             }
         report["workers kept"] = executor.worker_pids() == workers
     finally:
@@ -327,6 +340,8 @@ CORPUS = {
     "POSIX timers": (libc_call("libc.timer_create(1, None, buffer)"), True, "fast", 1, "exception: SystemExit: 38"),  # ENOSYS
     "a hundred pipes": (policy_doing("pipes = [os.pipe() for _ in range(100)]", "import os"), True, "fast", 1, "exception: OSError: [Errno 38] "),
 }
+# Programs whose returns would depend on the episodes run before them in the same process.
+STATEFUL = {"counter": COUNTER, "numpy settings": NUMPY_SETTINGS_COUNTER}
 CUBIC_EXTRACTION = GOOD + "@x\n" * 600  # a policy followed by 600 lines of `@x`: 2 kB
 
 USERS = ("root", "ordinary user")
@@ -448,6 +463,7 @@ def test_the_corpus_is_refused_and_harms_no_program_beside_it(run_in_mode) -> No
     corpus = {
         "escaped spec": ESCAPED, "good": GOOD, "cubic extraction": CUBIC_EXTRACTION,
         "cases": {name: dict(zip(("code", "escaped", "mode", "episodes"), case[:4])) for name, case in CORPUS.items()},
+        "stateful": STATEFUL,
     }  # fmt: skip
     report = run_in_mode(CORPUS_RUN, json.dumps(corpus))
     assert report["workers kept"]  # no attack cost a worker, and none was retried
@@ -457,3 +473,7 @@ def test_the_corpus_is_refused_and_harms_no_program_beside_it(run_in_mode) -> No
         assert outcome["failure"] is not None and outcome["failure"].startswith(expected), (name, outcome)
         assert API_KEY not in outcome["failure"] and NETRC_PASSWORD not in outcome["failure"], name
         assert outcome["the program beside it unharmed"], name
+    for name, outcome in report["stateful"].items():  # issue 33 finding 4: its episodes cannot see each other
+        assert not outcome["failures"], (name, outcome)
+        together, refereed, apart = outcome["returns"]
+        assert together == refereed == apart and len(together) == 4 and len(set(together)) > 1, (name, outcome)
