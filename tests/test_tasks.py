@@ -105,6 +105,26 @@ def test_the_quadruped_starts_upright_as_the_papers_policy_needs(examples):
     assert evaluate_policy(Quadruped(start="random"), namespace["policy"], range(6)).score < 120
 
 
+def test_quadruped_joint_noise_makes_upright_starts_differ_and_none_touches_the_floor():
+    plain, noisy = Quadruped(), Quadruped(joint_noise=0.05)
+    assert np.array_equal(plain.reset(1), plain.reset(2))  # without it, every upright episode is one episode
+    first, second = noisy.reset(1), noisy.reset(2)
+    assert not np.array_equal(first, second)
+    rest = noisy.model.qpos0[7:]  # the 16 hinge angles follow the root's 7 coordinates
+    for seed in range(5):
+        noisy.reset(seed)
+        offsets = noisy.data.qpos[7:] - rest
+        assert np.all(np.abs(offsets) <= 0.05) and np.any(np.abs(offsets) > 0.01)
+        assert noisy.data.ncon == 0 and noisy.data.xmat[noisy.model.body("torso").id, 8] == pytest.approx(1.0)  # level, above the floor
+    assert np.array_equal(noisy.reset(1), first)  # the draw is the episode seed's
+
+
+@pytest.mark.parametrize("noise", [-0.01, 0.6])
+def test_quadruped_joint_noise_out_of_range_is_refused(noise):
+    with pytest.raises(ValueError, match="joint_noise must be in"):
+        Quadruped(joint_noise=noise)
+
+
 def test_cheetah_reward_is_the_papers(suite):
     """The paper's clip(v / 10, 0, 1), v dm_control's `speed()`: equal up to rounding."""
     reference = suite.load("cheetah", "run", task_kwargs={"random": 3})

@@ -75,6 +75,9 @@ class Quadruped(MujocoEnvironment):
     lowest height where nothing touches the floor, as the paper's published policy needs (it
     runs from there in every episode, 189 over 10, the paper's 181.3; from random orientations it
     runs in 3 of 10). `start="random"`: dm_control's uniformly random orientation.
+    `joint_noise` (radians, default 0): each hinge angle starts off its rest angle by a uniform
+    draw from [-joint_noise, joint_noise] (the A1's start has ±0.05), so that upright episodes
+    differ from each other; 0 draws nothing, and every episode from upright is the same.
 
     `reward="paper"` (default): `clip(v / 10, 0, 1)` with `v` the torso's forward velocity
     (velocimeter x, torso frame), the paper's locomotion reward. `reward="dm_control"`:
@@ -85,12 +88,15 @@ class Quadruped(MujocoEnvironment):
     max_abs_reward = 1.0  # rewards lie in [0, 1]
     observation_size = 78
 
-    def __init__(self, reward: str = "paper", horizon: int = 1000, start: str = "upright"):
+    def __init__(self, reward: str = "paper", horizon: int = 1000, start: str = "upright", joint_noise: float = 0.0):
         if reward not in ("paper", "dm_control"):
             raise ValueError(f"unknown reward {reward!r}: expected 'paper' or 'dm_control'")
         if start not in ("upright", "random"):
             raise ValueError(f"unknown start {start!r}: expected 'upright' or 'random'")
+        if not 0.0 <= joint_noise <= 0.5:
+            raise ValueError(f"joint_noise must be in [0, 0.5] radians, got {joint_noise!r}")
         self._random_orientation = start == "random"
+        self._joint_noise = joint_noise
         model = run_model()
         super().__init__(model, n_sub_steps=round(_CONTROL_TIMESTEP / model.opt.timestep), horizon=horizon)
         self._dm_control_reward = reward == "dm_control"
@@ -112,24 +118,28 @@ class Quadruped(MujocoEnvironment):
             orientation /= np.linalg.norm(orientation)
         else:
             orientation = np.array([1.0, 0.0, 0.0, 0.0])
-        height = self._lowest_free_height(orientation)
+        hinges = self.model.qpos0[self._hinge_qpos].copy()
+        if self._joint_noise:
+            hinges += random.uniform(-self._joint_noise, self._joint_noise, size=hinges.size)
+        height = self._lowest_free_height(orientation, hinges)
         # dm_control runs every try as reset, unactuated forward, place, unactuated forward.
         # Each starts from mj_resetData, so only the last one shapes the state: replay it alone.
         mujoco.mj_resetData(self.model, self.data)
         self.forward_unactuated()
-        self._place_root(height, orientation)
+        self._place_root(height, orientation, hinges)
         self.forward_unactuated()
 
-    def _place_root(self, height: float, orientation: np.ndarray) -> None:
+    def _place_root(self, height: float, orientation: np.ndarray, hinges: np.ndarray) -> None:
         root = self._root_qpos
         self.data.qpos[root : root + 3] = 0.0, 0.0, height
         self.data.qpos[root + 3 : root + 7] = orientation
+        self.data.qpos[self._hinge_qpos] = hinges
 
-    def _lowest_free_height(self, orientation: np.ndarray) -> float:
+    def _lowest_free_height(self, orientation: np.ndarray, hinges: np.ndarray) -> float:
         """dm_control's search, with collision detection alone (the contacts are all it reads)."""
         height = 0.0
         for _ in range(_MAX_HEIGHT_ATTEMPTS + 1):
-            self._place_root(height, orientation)  # the other joints are still at qpos0
+            self._place_root(height, orientation, hinges)
             mujoco.mj_kinematics(self.model, self.data)
             mujoco.mj_collision(self.model, self.data)
             if self.data.ncon == 0:
