@@ -92,9 +92,12 @@ def compose(config_name: str, *overrides: str):
 class FakeOpenAIServer:
     """An OpenAI-compatible chat-completions server on 127.0.0.1 whose next answers can be
     scripted: "500", "429", "400", "404", "501", "garbage" (not JSON), "html" (not a completion), "empty",
-    "stall" (answers only after `stall_s`, past any sensible client timeout)."""
+    "stall" (answers only after `stall_s`, past any sensible client timeout). A request with
+    `stream` is answered in server-sent chunks of a few characters, `chunk_delay` apart, unless
+    `streams` is false: then it is refused with HTTP 400 naming `stream_options`, as by a server
+    that takes no streaming options."""
 
-    def __init__(self, honour_n: bool = True, delay: float = 0.0, stall_s: float = 3.0):
+    def __init__(self, honour_n: bool = True, delay: float = 0.0, stall_s: float = 3.0, streams: bool = True, chunk_delay: float = 0.0):
         self.requests: list[dict] = []
         self.script: list[str] = []
         self.max_active = 0
@@ -117,17 +120,32 @@ class FakeOpenAIServer:
                 with owner._lock:
                     owner._active -= 1
                 n = body.get("n", 1) if honour_n else 1
-                if behaviour in ("500", "429", "400", "404", "501"):
+                if body.get("stream") and not streams and behaviour == "ok":
+                    self.reply(400, {"error": {"message": "Unrecognized request argument supplied: stream_options", "type": "invalid_request_error"}})
+                elif behaviour in ("500", "429", "400", "404", "501"):
                     self.reply(int(behaviour), {"error": {"message": f"scripted {behaviour}", "type": "error"}})
                 elif behaviour == "garbage":
                     self.reply(200, b"{not json", content_type="application/json")
                 elif behaviour == "html":
                     self.reply(200, b"<html>proxy error</html>", content_type="text/html")
-                elif self.path.endswith("/chat/completions"):
-                    content = "" if behaviour == "empty" else None
-                    self.reply(200, completion(body, n, content))
-                else:  # /v1/completions: the body of a policy, as a code model continuing the prompt text writes it
-                    self.reply(200, text_completion(body, n))
+                else:
+                    chat = self.path.endswith("/chat/completions")
+                    # /v1/completions: the body of a policy, as a code model continuing the prompt text writes it
+                    answer = completion(body, n, "" if behaviour == "empty" else None) if chat else text_completion(body, n)
+                    if body.get("stream"):
+                        self.stream(answer, chat, bool(body.get("stream_options", {}).get("include_usage")))
+                    else:
+                        self.reply(200, answer)
+
+            def stream(self, answer, chat, include_usage):
+                self.send_response(200)
+                self.send_header("Content-Type", "text/event-stream")
+                self.end_headers()  # no length: the stream ends when the connection closes (HTTP/1.0)
+                for chunk in stream_chunks(answer, chat, include_usage):
+                    self.wfile.write(f"data: {json.dumps(chunk)}\n\n".encode())
+                    self.wfile.flush()
+                    time.sleep(chunk_delay)
+                self.wfile.write(b"data: [DONE]\n\n")
 
             def reply(self, status, payload, content_type="application/json"):
                 data = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
@@ -165,6 +183,24 @@ def completion(body: dict, n: int, content: str | None) -> dict:
         "id": "chatcmpl-test", "object": "chat.completion", "created": int(time.time()), "model": body["model"],
         "choices": choices, "usage": {"prompt_tokens": 10, "completion_tokens": 5 * n, "total_tokens": 10 + 5 * n},
     }
+
+
+def stream_chunks(answer: dict, chat: bool, include_usage: bool) -> list[dict]:
+    """A whole answer as the chunks of a stream: each choice's text 8 characters a chunk, then
+    the usage (if asked for)."""
+    kind = "chat.completion.chunk" if chat else "text_completion"
+    chunks = []
+    for choice in answer["choices"]:
+        text = choice["message"]["content"] if chat else choice["text"]
+        for start in range(0, len(text), 8):
+            piece = text[start : start + 8]
+            delta = {"index": choice["index"], "delta": {"content": piece}, "finish_reason": None} if chat else {
+                "index": choice["index"], "text": piece, "finish_reason": None, "logprobs": None,
+            }
+            chunks.append({"id": answer["id"], "object": kind, "created": answer["created"], "model": answer["model"], "choices": [delta]})
+    if include_usage:
+        chunks.append({"id": answer["id"], "object": kind, "created": answer["created"], "model": answer["model"], "choices": [], "usage": answer["usage"]})
+    return chunks
 
 
 def wait_for(condition, timeout: float = 120.0, interval: float = 0.01, what: str = "a condition"):

@@ -15,7 +15,7 @@ import types
 
 import numpy as np
 import pytest
-from conftest import EXAMPLES, FakeOpenAIServer, run_colmo
+from conftest import EXAMPLES, FakeOpenAIServer, run_colmo, wait_for
 
 from colmo.config import GeneratorConfig, LlamaCppConfig, MutateConfig, OpenAIConfig, VLLMConfig
 from colmo.errors import ConfigError
@@ -250,13 +250,16 @@ def test_openai_falls_back_to_parallel_single_requests_when_n_is_ignored():
         fake.close()
 
 
+@pytest.mark.parametrize("stream", [True, False], ids=["streamed", "whole"])
 @pytest.mark.parametrize("failure, reason", [
     ("500", "500"), ("429", "429"), ("garbage", "JSONDecodeError"),
     ("html", "no completion text"), ("empty", "no completion text"),
 ])
-def test_openai_retries_failed_and_unusable_answers(server, caplog, failure, reason):
+def test_openai_retries_failed_and_unusable_answers(server, caplog, failure, reason, stream):
+    if stream and failure == "garbage":
+        reason = "no completion text"  # a body that is no event stream holds no chunk
     server.script = [failure]
-    generator = make_generator(openai_config(server.url), seed=0)
+    generator = make_generator(openai_config(server.url, stream=stream), seed=0)
     with caplog.at_level(logging.WARNING, logger="colmo.generate"):
         generations = generator.generate(make_prompt(STARTER), 1)
     generator.close()
@@ -265,6 +268,52 @@ def test_openai_retries_failed_and_unusable_answers(server, caplog, failure, rea
     assert len(server.requests) == 2
     [message] = [r.getMessage() for r in caplog.records]
     assert "retry 1/3" in message and reason in message
+
+
+def test_openai_streams_the_answers_and_counts_their_tokens_as_they_come():
+    fake = FakeOpenAIServer(chunk_delay=0.05)
+    try:
+        generator = make_generator(openai_config(fake.url), seed=0)
+        assert generator.tokens_so_far() is None  # no generation in flight
+        done = threading.Event()
+        result: list = []
+        thread = threading.Thread(target=lambda: (result.extend(generator.generate(make_prompt(STARTER), 2)), done.set()))
+        thread.start()
+        counted = wait_for(lambda: not done.is_set() and generator.tokens_so_far(), what="tokens counted during the call")
+        thread.join(timeout=120)
+        assert 0 < counted <= 2 * 6  # each answer is 6 chunks of 8 characters
+        assert generator.tokens_so_far() is None
+        generator.close()
+    finally:
+        fake.close()
+    [request] = fake.requests
+    assert request["body"]["stream"] is True and request["body"]["stream_options"] == {"include_usage": True}
+    assert [g.text.splitlines()[2] for g in result] == ["    return 0.0 * obs[0]", "    return 1.0 * obs[0]"]
+    assert sum(g.prompt_tokens for g in result) == 10 and [g.completion_tokens for g in result] == [5, 5]  # the server's usage
+
+
+def test_openai_asks_a_server_that_refuses_streaming_for_whole_answers(caplog):
+    fake = FakeOpenAIServer(streams=False)
+    try:
+        generator = make_generator(openai_config(fake.url), seed=0)
+        with caplog.at_level(logging.WARNING, logger="colmo.generate"):
+            assert len(generator.generate(make_prompt(STARTER), 2)) == 2
+            assert len(generator.generate(make_prompt(STARTER), 2)) == 2
+        assert generator.tokens_so_far() is None
+        generator.close()
+    finally:
+        fake.close()
+    assert [r["body"].get("stream") for r in fake.requests] == [True, None, None]
+    [message] = [r.getMessage() for r in caplog.records]
+    assert "refused a streamed request (HTTP 400); asking for whole answers from now on" in message
+
+
+def test_openai_asks_for_whole_answers_without_stream(server):
+    generator = make_generator(openai_config(server.url, stream=False), seed=0)
+    assert len(generator.generate(make_prompt(STARTER), 2)) == 2
+    assert generator.tokens_so_far() is None
+    generator.close()
+    assert "stream" not in server.requests[0]["body"]
 
 
 def test_openai_backs_off_exponentially_with_full_jitter(server, caplog):

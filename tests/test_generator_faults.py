@@ -38,7 +38,8 @@ def test_failing_servers_are_retried_then_the_search_stops_cleanly(tmp_path, cap
     assert len(retries) >= 4
     reasons = " ".join(retries) + summary.stop_reason
     assert "InternalServerError" in reasons and "APIConnectionError" in reasons  # 500s and the refusing server
-    assert "JSONDecodeError" in reasons or "APITimeoutError" in reasons  # garbage or a stall
+    # garbage (streamed, a body that is no event stream holds no chunk) or a stall
+    assert "no completion text" in reasons or "APITimeoutError" in reasons
     # What was generated before the failures was evaluated and kept.
     assert summary.samples == 2
     store = ProgramStore(tmp_path / "programs.db")

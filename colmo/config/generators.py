@@ -79,6 +79,10 @@ class OpenAIConfig(LanguageModelConfig):
     model: str = option("Qwen/Qwen2.5-Coder-7B-Instruct", "the model name the server knows")
     api_key_env: str = option("OPENAI_API_KEY", "name of the environment variable holding the key")
     use_n: bool = option(True, "ask for batch_size choices in one request; a server that returns fewer is asked one per request")
+    stream: bool = option(
+        True, "answers streamed, so the display counts their tokens as they come; a server that refuses a streamed request "
+        "(HTTP 400 or 422 naming it) is asked for whole answers from then on; false: whole answers",
+    )
     max_concurrency: int = option(
         1, "requests in flight per server, the rest wait here: a llama.cpp server answers one at a time unless started "
         "with more slots (llama-server --parallel N, OLLAMA_NUM_PARALLEL); vLLM takes 16 or more",

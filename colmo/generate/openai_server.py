@@ -4,7 +4,10 @@ openai talks to an OpenAI-compatible endpoint with the official client: chat com
 (`/v1/chat/completions`, `prompt_format=chat`) or completions of the prompt text
 (`/v1/completions`, `prompt_format=completion`, stopping at the next top-level definition). It
 asks for `n` choices in one request when `use_n`; a server that returns fewer (llama.cpp and
-Ollama ignore `n`) is asked one completion per request from then on, in parallel.
+Ollama ignore `n`) is asked one completion per request from then on, in parallel. With `stream`
+the answers come as server-sent chunks, each counted as a token as it arrives
+(`tokens_so_far`), their usage from the stream's last chunk where the server sends it; a server
+that refuses a streamed request is asked for whole answers from then on.
 
 At most `max_concurrency` requests are in flight per server; the others wait here, before they
 are sent, so a request's `timeout_s` counts from when it is sent, not while it is queued (a
@@ -28,6 +31,7 @@ import random
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any, Optional
 
 from colmo.config import OpenAIConfig
@@ -43,6 +47,7 @@ if TYPE_CHECKING:
 
 _CHECK_TIMEOUT_S = 5.0
 _RETRYABLE_STATUS = frozenset({408, 409, 429})
+_STREAM_REFUSED = frozenset({400, 422})  # what servers that take no `stream`/`stream_options` answer, naming it
 
 
 class _UnusableAnswer(ValueError):
@@ -95,6 +100,8 @@ class OpenAIGenerator(LanguageModelGenerator):
         self._stopped = False  # cancelled or closed: nothing more is sent
         self._failures = 0  # consecutive failed attempts, all servers together
         self._use_n = cfg.use_n
+        self._stream = cfg.stream
+        self._tokens: Optional[int] = None  # streamed tokens of the generation in flight; None: none in flight
         self._pool = ThreadPoolExecutor(max_workers=cfg.batch_size, thread_name_prefix="colmo-openai")
         self._check_servers()
 
@@ -146,11 +153,23 @@ class OpenAIGenerator(LanguageModelGenerator):
         raise GeneratorError(f"no server serves a {form} of model {self.cfg.model!r}: {'; '.join(refusals)}")
 
     def generate(self, prompt: Prompt, n: int) -> list[Generation]:
-        generations = self._complete(prompt, n, self.request_seed()) if self._use_n and n > 1 else []
-        seeds = [self.request_seed() for _ in range(n - len(generations))]
-        for batch in self._pool.map(lambda seed: self._complete(prompt, 1, seed), seeds):
-            generations += batch
-        return generations
+        with self._lock:
+            self._tokens = 0
+        try:
+            generations = self._complete(prompt, n, self.request_seed()) if self._use_n and n > 1 else []
+            seeds = [self.request_seed() for _ in range(n - len(generations))]
+            for batch in self._pool.map(lambda seed: self._complete(prompt, 1, seed), seeds):
+                generations += batch
+            return generations
+        finally:
+            with self._lock:
+                self._tokens = None
+
+    def tokens_so_far(self) -> Optional[int]:
+        """Tokens streamed so far for the generation in flight, all its requests together (None
+        without streaming)."""
+        with self._lock:
+            return self._tokens if self._stream else None
 
     def cancel(self) -> None:
         with self._lock:
@@ -167,19 +186,29 @@ class OpenAIGenerator(LanguageModelGenerator):
         """One request, retried; its generations, or none once its retries are spent."""
         import openai
         cfg = self.cfg
+        stream_refused = False
         for attempt in range(cfg.max_retries + 1):
             server = self._acquire()
             if server is None:
                 return []
-            start = time.perf_counter()
+            start, streamed = time.perf_counter(), self._stream
             try:
-                response = self._send(server, prompt, n, seed)
+                response = self._send(server, prompt, n, seed, streamed)
                 texts = _texts(response, self.chat)
             except openai.APIStatusError as error:
-                if error.status_code not in _RETRYABLE_STATUS and error.status_code < 500:
+                if streamed and error.status_code in _STREAM_REFUSED and "stream" in str(error).lower():
+                    with self._lock:
+                        if self._stream:
+                            logger.warning(
+                                "openai: %s refused a streamed request (HTTP %d); asking for whole answers from now on", server.url, error.status_code,
+                            )
+                        self._stream = False
+                    stream_refused = True
+                elif error.status_code not in _RETRYABLE_STATUS and error.status_code < 500:
                     message = f"{server.url} refused the request: HTTP {error.status_code}: {one_line(error)}"
                     raise GeneratorError(message) from None
-                reason = self._failed(server, error)
+                else:
+                    reason = self._failed(server, error)
             except (openai.APIConnectionError, openai.APIResponseValidationError, ValueError) as error:
                 # ValueError: a body that is not JSON, or `_UnusableAnswer`.
                 reason = self._failed(server, error)
@@ -187,6 +216,8 @@ class OpenAIGenerator(LanguageModelGenerator):
                 return self._succeeded(server, prompt, response, texts, n, time.perf_counter() - start)
             finally:
                 self._release(server)
+            if stream_refused:  # asked again at once, whole, as no attempt of its own
+                return self._complete(prompt, n, seed)
             if attempt < cfg.max_retries and not self._stopped:
                 # Full jitter: requests that failed together do not all come back together.
                 delay = random.uniform(0.0, min(cfg.max_backoff_s, cfg.backoff_s * 2**attempt))
@@ -197,15 +228,40 @@ class OpenAIGenerator(LanguageModelGenerator):
         logger.warning("openai: dropping a request after %d attempts; the last failed with %s", cfg.max_retries + 1, reason)
         return []
 
-    def _send(self, server: _Server, prompt: Prompt, n: int, seed: int) -> Any:
+    def _send(self, server: _Server, prompt: Prompt, n: int, seed: int, streamed: bool) -> Any:
         cfg = self.cfg
         sampling = dict(
             model=cfg.model, temperature=cfg.temperature_for(prompt.retry), top_p=cfg.top_p, max_tokens=cfg.max_tokens, seed=seed,
             **({"n": n} if n > 1 else {}),
         )
+        if streamed:
+            sampling.update(stream=True, stream_options={"include_usage": True})
         if self.chat:
-            return server.client.chat.completions.create(messages=prompt.messages, **sampling)
-        return server.client.completions.create(prompt=prompt.text, stop=list(COMPLETION_STOP), **sampling)
+            response = server.client.chat.completions.create(messages=prompt.messages, **sampling)
+        else:
+            response = server.client.completions.create(prompt=prompt.text, stop=list(COMPLETION_STOP), **sampling)
+        return self._gathered(response) if streamed else response
+
+    def _gathered(self, stream: Any) -> SimpleNamespace:
+        """A streamed answer as a whole one (its choices' texts, its usage), each chunk that adds
+        text counted in `tokens_so_far` as it arrives; without usage from the server, its
+        completion tokens are those chunks."""
+        texts: dict[int, list[str]] = {}
+        usage = None
+        for chunk in stream:
+            usage = getattr(chunk, "usage", None) or usage
+            for choice in getattr(chunk, "choices", None) or []:
+                piece = getattr(getattr(choice, "delta", None), "content", None) if self.chat else getattr(choice, "text", None)
+                if piece:
+                    texts.setdefault(getattr(choice, "index", 0) or 0, []).append(piece)
+                    with self._lock:
+                        if self._tokens is not None:
+                            self._tokens += 1
+        joined = ["".join(pieces) for _, pieces in sorted(texts.items())]
+        choices = [SimpleNamespace(message=SimpleNamespace(content=text), text=text) for text in joined]
+        if usage is None:
+            usage = SimpleNamespace(prompt_tokens=0, completion_tokens=sum(map(len, texts.values())))
+        return SimpleNamespace(choices=choices, usage=usage)
 
     def _acquire(self) -> Optional[_Server]:
         """A slot on a server, waiting until one frees: round robin over the servers that have
