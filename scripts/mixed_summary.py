@@ -1,8 +1,9 @@
 """The table of scripts/mixed_experiment.sh: every finished run, and each variant's mean ± std.
 
-    python scripts/mixed_summary.py OUT
+    python scripts/mixed_summary.py OUT [OUT ...]
 
-Per run (OUT/<task>/<variant>/s<seed>/<job>/summary.json): the best training and held-out scores,
+Per run (OUT/<task>/<variant>/s<seed>/<job>/summary.json, or without the job directory as the
+results pages keep them, e.g. docs/mixed-generation): the best training and held-out scores,
 samples, each generator's share, and the simplified winner's lines and parameters. Then per task,
 each variant against mutation alone: the difference of means with its bootstrap interval
 (`colmo.comparison.difference`), training and held-out.
@@ -11,6 +12,7 @@ each variant against mutation alone: the difference of means with its bootstrap 
 from __future__ import annotations
 
 import json
+import re
 import sys
 from pathlib import Path
 
@@ -25,7 +27,8 @@ def _score(value: float | None) -> str:
 
 def row(path: Path) -> dict:
     summary = json.loads(path.read_text())
-    task, variant, seed = path.parts[-5], path.parts[-4], path.parts[-3]
+    at = max(i for i, part in enumerate(path.parts) if re.fullmatch(r"s\d+", part))  # the seed's directory
+    task, variant, seed = path.parts[at - 2], path.parts[at - 1], path.parts[at]
     simplified = summary.get("simplified") or {}
     split = ", ".join(
         f"{name} {entry['samples']} ({entry['programs_evaluated']} evaluated, best {_score(entry['best_score'])})"
@@ -46,9 +49,10 @@ def row(path: Path) -> dict:
     }
 
 
-def main(out: Path) -> None:
+def main(outs: list[Path]) -> None:
+    paths = sorted(path for out in outs for pattern in ("*/*/s*/summary.json", "*/*/s*/*/summary.json") for path in out.glob(pattern))
     # A run stopped before its 30 minutes (Ctrl-C, a killed session) is resumed, not reported.
-    rows = [r for r in (row(path) for path in sorted(out.glob("*/*/s*/*/summary.json"))) if r["stop"] in ("max_seconds", "max_samples")]
+    rows = [r for r in map(row, paths) if r["stop"] in ("max_seconds", "max_samples")]
     print("| task | variant | seed | best | held-out | samples | by generator | simplified lines | parameters | seconds |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
@@ -79,4 +83,4 @@ def main(out: Path) -> None:
 
 
 if __name__ == "__main__":
-    main(Path(sys.argv[1]))
+    main([Path(arg) for arg in sys.argv[1:]])

@@ -10,8 +10,8 @@ from pathlib import Path
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "mixed_summary.py"
 
 
-def _run(out: Path, variant: str, seed: int, best: float, heldout: float, stop: str = "max_seconds") -> None:
-    job = out / "pendulum" / variant / f"s{seed}" / "0_job"
+def _run(out: Path, variant: str, seed: int, best: float, heldout: float, stop: str = "max_seconds", job: str = "0_job") -> None:
+    job = out / "pendulum" / variant / f"s{seed}" / job
     job.mkdir(parents=True)
     summary = {
         "best_score": best,
@@ -35,3 +35,14 @@ def test_the_table_compares_each_variant_with_mutation_alone(tmp_path: Path) -> 
     assert "| pendulum | mixed | 3 | 710.0 ± 10.0 | 700.0 ± 10.0 |" in text
     (line,) = [line for line in text.splitlines() if line.startswith("| pendulum | mixed | 3 vs 3 |")]
     assert line.count("-100.0, 95% interval [") == 2 and "no significant" not in line
+
+
+def test_runs_of_several_directories_compare_the_results_pages_layout_too(tmp_path: Path) -> None:
+    runs, page = tmp_path / "runs", tmp_path / "docs"
+    for seed, (new, mutate) in enumerate([(300.0, 220.0), (310.0, 230.0), (320.0, 210.0)]):
+        _run(runs, "default", seed, new, new - 20)
+        _run(page, "mutate", seed, mutate, mutate - 40, job="")  # docs/<page>/<task>/<variant>/s<seed>/summary.json
+    text = subprocess.run([sys.executable, str(SCRIPT), str(runs), str(page)], capture_output=True, text=True, check=True).stdout
+    assert "| pendulum | mutate | 3 | 220.0 ± 10.0 | 180.0 ± 10.0 |" in text
+    (line,) = [line for line in text.splitlines() if line.startswith("| pendulum | default | 3 vs 3 |")]
+    assert line.startswith("| pendulum | default | 3 vs 3 | +90.0, 95% interval [")
