@@ -43,7 +43,7 @@ from colmo.names import misnamed
 from colmo.record import EVALUATED, SampleRecord, Summary, Totals
 from colmo.robustness import grid_points, save
 from colmo.sandbox.referee import LOCKSTEP
-from colmo.store import SIMPLIFIED_POLICY_FILE, ProgramStore
+from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, ProgramStore
 
 if TYPE_CHECKING:
     from colmo.database import StoredProgram
@@ -387,5 +387,9 @@ def _simplify(
         result.size_initial.nodes, size.nodes, result.size_initial.params, size.params, result.scores_initial.train, result.scores.train,
     )
     header = f"# colmo: the best policy of {cfg.task.name} simplified: training score {result.scores.train:.2f}, held-out {result.scores.heldout:.2f}\n"
+    if result.cut_short:  # the finish's time ran out before a round found nothing more to delete
+        more = f"colmo-simplify task={cfg.task.name} policy_file={run_dir / BEST_POLICY_FILE}"
+        log.warning("the simplification stopped at the finish's deadline after %d round(s); to go on: %s", result.rounds, more)
+        header += f"# cut short at the finish's deadline after {result.rounds} round(s); to go on: {more}\n"
     (run_dir / SIMPLIFIED_POLICY_FILE).write_text(header + result.code + "\n")
     return result.to_json()

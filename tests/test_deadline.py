@@ -78,6 +78,10 @@ def test_a_short_run_ends_within_5_s_of_its_limit_with_everything_it_promises(tm
         assert (run.run_dir / name).is_file(), (name, run.stderr[-3000:])
     assert run.summary["best_heldout_score"] is not None
     assert run.summary["media"]["video"] == VIDEO_FILE
+    # A simplification the deadline stopped says so, with the command that goes on from the best policy.
+    header = (run.run_dir / SIMPLIFIED_POLICY_FILE).read_text().split("\nimport", 1)[0]
+    go_on = f"to go on: colmo-simplify task=pendulum policy_file={run.run_dir / BEST_POLICY_FILE}"
+    assert (go_on in header) is run.summary["simplified"]["cut_short"], (header, run.summary["simplified"])
 
 
 def test_each_job_of_a_sweep_searches_for_its_whole_limit(tmp_path):

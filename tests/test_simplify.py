@@ -574,12 +574,14 @@ def test_runs_are_deterministic_and_max_rounds_cuts_them_short():
     assert simplify(SUM_OF_TERMS, scoring(score_batch)).steps == whole.steps
     again = simplify(SUM_OF_TERMS, scoring(score_batch), max_rounds=1)
     assert again.steps == whole.steps[:1] and again.rounds == 1
+    assert not whole.cut_short and not again.cut_short  # it found nothing more, or was told to stop at a round count
 
 
 def test_stop_keeps_the_program_so_far_and_skips_retuning():
     retuned: list[str] = []
     result = simplify(SUM_OF_TERMS, scoring(lambda codes: [Scores(1.0, 1.0) for _ in codes]), retune=lambda c: retuned.append(c) or c, stop=lambda: True)
     assert result.rounds == 0 and result.code == SUM_OF_TERMS and not retuned
+    assert result.cut_short and result.to_json()["cut_short"] is True
 
 
 # --- through the sandbox: simplify_program and `python -m colmo.simplify` ----------------------------

@@ -112,6 +112,7 @@ class SimplifyResult:
     programs_scored: int  # programs scored on the training episodes, the original included
     heldout_scored: int  # programs also scored on the held-out episodes
     rounds: int  # greedy rounds run (the last found nothing acceptable, unless cut short)
+    cut_short: bool  # `stop()` ended the rounds (a deadline, Ctrl-C): more might have gone
     static_pass_confirmed: bool  # False: the cleaned program scored differently, so it was not used
     retuned: bool  # the re-tuned code scored better and was kept
     seconds: float
@@ -136,6 +137,7 @@ class SimplifyResult:
             "programs_scored": self.programs_scored,
             "heldout_scored": self.heldout_scored,
             "rounds": self.rounds,
+            "cut_short": self.cut_short,
             "static_pass_confirmed": self.static_pass_confirmed,
             "retuned": self.retuned,
             "seconds": round(self.seconds, 3),
@@ -249,8 +251,9 @@ def simplify(
         steps.append(Step(candidate.description, current, scores, measure(current)))
         log.info("round %d: %d nodes, training %.2f, held-out %.2f: %s", rounds, candidate.nodes, scores.train, scores.heldout, candidate.description)
 
+    cut_short = stop()
     retuned = False
-    if retune is not None and not stop() and parametrize(current, function_name).n_params:
+    if retune is not None and not cut_short and parametrize(current, function_name).n_params:
         tuned = retune(current)
         if not _same_code(tuned, current):
             (tuned_train,) = scorer.train([tuned])
@@ -274,7 +277,7 @@ def simplify(
     return SimplifyResult(
         code_initial=code, code=current, scores_initial=scores_initial, scores=scores,
         size_initial=measure(code), size=size, steps=tuple(steps),
-        programs_scored=len(scorer.train_scores), heldout_scored=len(scorer.heldout_scores), rounds=rounds,
+        programs_scored=len(scorer.train_scores), heldout_scored=len(scorer.heldout_scores), rounds=rounds, cut_short=cut_short,
         static_pass_confirmed=confirmed, retuned=retuned, seconds=time.perf_counter() - start,
     )
 
