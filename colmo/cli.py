@@ -92,8 +92,8 @@ RENAMED_KEYS = {"evaluation.episodes": "heldout.episodes", "evaluation.": "finis
 
 
 def renamed(argv: list[str]) -> list[str]:
-    """`argv` with each override of a renamed key (`RENAMED_KEYS`) written with its new name,
-    which is said once per key on stderr."""
+    """`argv` with each override of a renamed key (`RENAMED_KEYS`) written with its new name, a
+    line on stderr saying it (`evaluation={...}`, the whole group, is not rewritten)."""
     result = []
     for arg in argv:
         prefix = arg[: len(arg) - len(arg.lstrip("+~"))]
