@@ -235,6 +235,17 @@ def test_a_starter_with_nothing_to_tune_leaves_the_first_estimate_to_the_samples
     assert "estimated duration: search estimated once the first samples are in (the starter has no constants to tune" in caplog.text
 
 
+def test_a_language_models_first_estimate_says_what_it_leaves_out(caplog):
+    cfg = compose("search", "task=pendulum", "llm=openai", "search.max_samples=12", "finish.render=false")
+    budget = TimeBudget(0.0)
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        budget.plan(cfg, (1.0, 1.0), program_seconds=6.9, executor=IdleWorkers())
+    assert re.search(
+        r"estimated duration: search \S+ \(12 samples x 6\.9 s of tuning, \d+ at a time, if every answer is a new program; "
+        r"the model's calls come on top: measured on the first samples\)", caplog.text,
+    ), caplog.text
+
+
 def test_a_resumed_run_has_what_its_earlier_processes_left_of_the_limit():
     """`search.max_seconds` is the whole run's, as `search.max_samples` is: a run stopped after
     40 s of a 100 s limit and resumed searches 60 s more, not 100 (equal budgets in a sweep)."""
