@@ -212,9 +212,10 @@ class TimeBudget:
         if search is None:
             what = "estimated once the first samples are in (the starter has no constants to tune: its time says nothing of a program's)"
         else:
-            what = f"{duration(search)} ({cfg.search.max_samples} samples x {program_seconds:.1f} s of tuning, {in_parallel} at a time)"
-            if isinstance(cfg.llm, LanguageModelConfig):  # the model's calls and duplicates are not known before its first answers
-                what = f"{what[:-1]}, if every answer is a new program; the model's calls come on top: measured on the first samples)"
+            # A model's calls and its duplicates are not known before its first answers.
+            unknown = ", if every answer is a new program; the model's calls come on top: measured on the first samples"
+            assumed = unknown if isinstance(cfg.llm, LanguageModelConfig) else ""
+            what = f"{duration(search)} ({cfg.search.max_samples} samples x {program_seconds:.1f} s of tuning, {in_parallel} at a time{assumed})"
         log.info("estimated duration: search %s, finish %s; limit that binds: %s%s", what, duration(plan.seconds), limit, early)
 
     def follow_samples(
