@@ -4,8 +4,10 @@ A policy program is a Python module (imports, constants, helpers) that defines `
 `parametrize` replaces every tunable numeric literal with `params[i]` (i in source order) so a
 gradient-free optimizer can tune the constants (paper Sec. IV-C), and `instantiate` writes values
 back. The skeleton reads `params` as a free global: `exec(skeleton, {"params": values, ...})`.
-The structure key is the sha256 of the skeleton's AST dump, so programs that differ only in
-tunable constants, comments, docstrings, unused imports or formatting share a key; a changed index, name or
+The structure key is the sha256 of the AST dump of the skeleton's canonical form
+(`colmo.canonical`), so programs that differ only in tunable constants, comments, docstrings,
+unused imports or formatting share a key, and so do programs whose constants reach the same
+functions when tuned (`c * (a * x + b * y)` and `a * x + b * y`); a changed index, name or
 operator gives a new one.
 
 Which literals are tunable
@@ -57,6 +59,7 @@ from colmo.astutil import (
     stored_names,
     strip_docstrings,
 )
+from colmo.canonical import canonical_form
 
 PARAMS_NAME = "params"
 DISPLAY_DIGITS = 4  # significant digits of the constants in the code a person reads
@@ -171,9 +174,11 @@ def measure(code: str) -> ProgramSize:
 
 
 def structure_key(skeleton: str) -> str:
-    """sha256 hex of the skeleton's AST dump (positions excluded, so formatting does not count)."""
-    tree = _parse(skeleton)
+    """sha256 hex of the AST dump (positions excluded, so formatting does not count) of the
+    skeleton's canonical form (`colmo.canonical`: constants that add no freedom merged)."""
+    tree = canonical_form(_parse(skeleton), _is_slot)
     strip_docstrings(tree)
+    _drop_unused_imports(tree)  # `np.pi * c` became `c`
     return hashlib.sha256(ast.dump(tree).encode()).hexdigest()
 
 

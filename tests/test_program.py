@@ -188,7 +188,7 @@ def test_key_ignores_constants_comments_docstrings_and_formatting():
         ("x1", "theta"),  # a variable name
         ("> np.pi", ">= np.pi"),  # comparison operator
         ("np.sin(x1)", "np.cos(x1)"),  # function
-        ("- 2.746", "+ 2.746"),  # arithmetic operator
+        ("- 2.746", "/ 2.746"),  # arithmetic operator (`+ 2.746` is the same structure: the constant takes the sign)
     ],
 )
 def test_key_changes_with_structure(old, new):
@@ -199,6 +199,57 @@ def test_key_changes_with_structure(old, new):
 def test_key_ignores_int_or_float_and_sign_of_a_tunable():
     keys = {parametrize(f"def policy(obs):\n    return {c} * obs[0]").key for c in ("2", "2.5", "-3", "+0.1")}
     assert len(keys) == 1
+
+
+# Pairs that reach the same functions when their constants are tuned (colmo.canonical), each
+# with constants for the second that make it compute what the first computes.
+SAME_FAMILY = [
+    ("2.0 * 3.0 * obs[0]", "6.0 * obs[0]"),
+    ("obs[0] / 4.0", "0.25 * obs[0]"),
+    ("0.5 * (1.0 * obs[0] + 2.0 * obs[1])", "0.5 * obs[0] + 1.0 * obs[1]"),
+    ("1.0 * obs[0] - 2.0 * obs[1]", "1.0 * obs[0] + -2.0 * obs[1]"),
+    ("-(1.0 * obs[0] + 2.0 * obs[1])", "-1.0 * obs[0] + -2.0 * obs[1]"),
+    ("obs[0] - 3.0", "obs[0] + -3.0"),
+    ("1.0 + 2.0 + obs[0]", "3.0 + obs[0]"),
+    ("0.5 * np.clip(2.0 * obs[0] + 4.0 * obs[1], -1.0, 1.0)", "np.clip(1.0 * obs[0] + 2.0 * obs[1], -0.5, 0.5)"),
+    ("2.0 * np.array([1.0 * obs[0], 3.0 * obs[1]])", "np.array([2.0 * obs[0], 6.0 * obs[1]])"),
+    ("3.0 * np.where(obs[0] > 0.1, 1.0 * obs[1], 2.0 * obs[2])", "np.where(obs[0] > 0.1, 3.0 * obs[1], 6.0 * obs[2])"),
+    ("2.0 * obs[0] / (4.0 * obs[1] + 2.0)", "obs[0] / (2.0 * obs[1] + 1.0)"),
+    ("np.pi / 2.0 * obs[0]", "1.5707963267948966 * obs[0]"),
+]
+
+# Pairs that look alike and are not the same functions whatever the constants.
+OTHER_FAMILY = [
+    ("3.0 - obs[0]", "3.0 + obs[0]"),  # the sign of a term without a constant factor
+    ("2.0 / (obs[0] + 1.0)", "2.0 / (obs[0] + obs[1])"),
+    ("2.0 * np.tanh(1.0 * obs[0])", "np.tanh(1.0 * obs[0])"),  # tanh is not homogeneous
+    ("2.0 * max(1.0 * obs[0], 0.5)", "max(1.0 * obs[0], 0.5)"),  # a negative factor turns max into min
+    ("2.0 * (1.0 * obs[0] + obs[1])", "1.0 * obs[0] + obs[1]"),  # obs[1] has no constant to take the factor
+    ("2.0 * obs[0] * 3.0 * obs[1]", "2.0 * obs[0] + 3.0 * obs[1]"),
+    ("2.0 ** obs[0]", "2.0 * obs[0]"),
+]
+
+
+def _policy(expression: str) -> str:
+    return f"import numpy as np\ndef policy(obs):\n    return {expression}"
+
+
+@pytest.mark.parametrize("first, second", SAME_FAMILY)
+def test_constants_that_add_no_freedom_do_not_make_a_new_structure(first, second):
+    assert parametrize(_policy(first)).key == parametrize(_policy(second)).key
+    obs = np.array([0.3, -0.7, 1.1])
+    computed = [eval(expression, {"np": np, "obs": obs}) for expression in (first, second)]
+    np.testing.assert_allclose(computed[0], computed[1])
+
+
+@pytest.mark.parametrize("first, second", OTHER_FAMILY)
+def test_other_functions_keep_their_own_structure(first, second):
+    assert parametrize(_policy(first)).key != parametrize(_policy(second)).key
+
+
+def test_the_canonical_form_leaves_the_skeleton_and_its_constants_alone():
+    program = parametrize(_policy("0.5 * (1.0 * obs[0] - 2.0 * obs[1])"))
+    assert program.values == (0.5, 1.0, 2.0) and "params[0] * (params[1] * obs[0] - params[2] * obs[1])" in program.skeleton
 
 
 # --- what is tunable -----------------------------------------------------------------------
