@@ -261,7 +261,10 @@ class Search:
         self.next_sample += len(samples)
         for sample, answer in zip(samples, answers):
             batch.outcomes.append(self.outcomes.submit(sample, answer.reading, self.database))
-        self.in_flight_samples += sum(sample.generation.calls for sample in samples)
+        calls = sum(sample.generation.calls for sample in samples)
+        self.in_flight_samples += calls
+        if generator is self.sampler.generator:  # duplicates and failures settle at once: the others are tuned
+            self.budget.follow_generation(self._samples_left(), calls, seconds, sum(not outcome.done() for outcome in batch.outcomes))
         return batch
 
     def _abandon_generation(self, programs: int) -> bool:

@@ -89,6 +89,9 @@ class TimeBudget:
         # (`plan`), then from the samples settled (`follow_samples`); None while nothing tells.
         self.estimated_seconds: Optional[float] = None
         self._said: Optional[tuple[float, float]] = None  # when an estimate of the search's end was last said, and that end
+        # A language model's run, until its first batch is generated: (a program's tuning, programs tuned at a time, whether
+        # generation overlaps tuning, search.max_samples), for the estimate from the model's first calls (`follow_generation`).
+        self._model_first: Optional[tuple[float, int, bool, int]] = None
         self.load_factor = 1.0  # the workers' recent seconds per evaluation over the calibration's
         self._lock = threading.Lock()
         self._executor: Optional[Executor] = None
@@ -192,6 +195,8 @@ class TimeBudget:
         in_parallel = max(1, min(concurrent_programs, workers // cfg.gfo.workers))
         search = cfg.search.max_samples * program_seconds / in_parallel if program_seconds else None
         self.estimated_seconds = None if search is None else self.elapsed() + search
+        if isinstance(cfg.llm, LanguageModelConfig) and program_seconds:
+            self._model_first = (program_seconds, in_parallel, cfg.search.queue_size > 1, cfg.search.max_samples)
         plan = plan_finish(cfg, self.calibration, workers)
         limit = "max_samples"
         if self.max_seconds:
@@ -240,11 +245,7 @@ class TimeBudget:
         flying = sum(count for count, _ in in_flight)
         per_sample = in_system / (size + flying)
         left = max(max(max_samples - totals.samples - flying, 0) * per_sample, max((start + in_system - now for _, start in in_flight), default=0.0))
-        self.estimated_seconds = now - self.start + left
-        end, binds = now + left, "max_samples"
-        if self.max_seconds and end > self.deadline:
-            end = max(self.deadline, now)
-            binds = f"max_seconds={self.max_seconds:g} ({max_samples} samples would take {duration(left)})"
+        end, binds = self._end(now, left, max_samples)
         if self._said is not None and abs(end - self._said[1]) <= _RESAY * max(self._said[1] - self._said[0], per_sample):
             return
         self._said = (now, end)
@@ -255,6 +256,40 @@ class TimeBudget:
             "estimated duration after %d samples: search %s more (%.1f s a sample%s); limit that binds: %s",
             totals.samples, duration(end - now), per_sample, model, binds,
         )
+
+    def follow_generation(self, samples_left: int, calls: int, seconds: float, to_tune: int, now: Optional[float] = None) -> None:
+        """The search's end estimated once a language model's first batch is generated (its
+        `calls` in `seconds`, `to_tune` of their answers new programs; `samples_left` of
+        `search.max_samples`, which counts model calls, not started yet), before any sample
+        settles: the plan's line could not know what the model's calls take, nor how many answers
+        are duplicates (asked again, each call a sample) that are never tuned. A sample takes its
+        call and its share of tuning, or the longer of the two where batches queue (generation
+        then overlaps tuning); the last batch's tuning comes on top. Said once; `follow_samples`
+        takes over when samples settle."""
+        if self._model_first is None or self._said is not None or not calls:
+            return
+        program_seconds, in_parallel, overlaps, max_samples = self._model_first
+        self._model_first = None
+        now = time.perf_counter() if now is None else now
+        call = seconds / calls
+        tuning = program_seconds * to_tune / calls / in_parallel
+        per_sample = max(call, tuning) if overlaps else call + tuning
+        left = samples_left * per_sample + tuning * calls
+        end, binds = self._end(now, left, max_samples)
+        self._said = (now, end)
+        log.info(
+            "estimated duration after the model's first %d calls: search %s more (%.1f s a sample: a call %.1f s, %d new programs "
+            "of %d calls tuned, %.1f s each, %d at a time); limit that binds: %s",
+            calls, duration(end - now), per_sample, call, to_tune, calls, program_seconds, in_parallel, binds,
+        )
+
+    def _end(self, now: float, left: float, samples: int) -> tuple[float, str]:
+        """When the search ends if `left` more seconds take its `samples` to the end, and the
+        limit that binds; `estimated_seconds` set to match."""
+        self.estimated_seconds = now - self.start + left
+        if self.max_seconds and now + left > self.deadline:
+            return max(self.deadline, now), f"max_seconds={self.max_seconds:g} ({samples} samples would take {duration(left)})"
+        return now + left, "max_samples"
 
     def _plan_finish(self) -> FinishPlan:
         """The finish planned at the workers' current speed; the deadlines leave it its time."""

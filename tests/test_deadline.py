@@ -23,7 +23,7 @@ from conftest import compose, run_colmo
 from colmo.finish import SAFETY, RefereeCost, plan_finish
 from colmo.render import PLOT_FILE, VIDEO_FILE
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, STORE_FILE, SUMMARY_FILE
-from colmo.timelimit import TimeBudget, job_start, process_seconds
+from colmo.timelimit import TimeBudget, duration, job_start, process_seconds
 
 
 @dataclass
@@ -244,6 +244,60 @@ def test_a_language_models_first_estimate_says_what_it_leaves_out(caplog):
         r"estimated duration: search \S+ \(12 samples x 6\.9 s of tuning, \d+ at a time, if every answer is a new program; "
         r"the model's calls come on top: measured on the first samples\)", caplog.text,
     ), caplog.text
+
+
+def model_budget(max_seconds: float, *overrides: str) -> TimeBudget:
+    """A language model's run of 12 samples planned with a program's tuning of 6.9 s."""
+    budget = TimeBudget(max_seconds)
+    cfg = compose("search", "task=pendulum", "llm=openai", "search.max_samples=12", f"search.max_seconds={max_seconds}", "finish.render=false", *overrides)
+    budget.plan(cfg, (1.0, 1.0), program_seconds=6.9, executor=IdleWorkers())
+    return budget
+
+
+def test_the_models_first_answers_say_what_its_calls_take(caplog):
+    """The 1.5B model's measured run: its first line said 41 s of tuning where the run took
+    126 s, its calls 10-18 s each. Once the first batch is generated (4 calls in 48 s, 3 of
+    their answers new programs) the line counts the calls: 12 s a sample (a sample is a call),
+    the longer of the call and its share of tuning (which overlap: batches queue), for the 8
+    samples not started, and the batch's tuning."""
+    budget = model_budget(0)
+    budget.search_starts()
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        budget.follow_generation(8, 4, 48.0, 3, now=budget.start + 50.0)
+        budget.follow_generation(4, 4, 10.0, 4, now=budget.start + 60.0)  # said once: the samples' pace takes over
+    lines = [m for m in caplog.messages if m.startswith("estimated duration after the model")]
+    in_parallel = re.search(r"(\d+) at a time", lines[0]).group(1)
+    tuning = 6.9 * 3 / 4 / int(in_parallel)
+    left = 8 * max(12.0, tuning) + 4 * tuning
+    assert lines == [
+        f"estimated duration after the model's first 4 calls: search {duration(left)} more (12.0 s a sample: a call 12.0 s, "
+        f"3 new programs of 4 calls tuned, 6.9 s each, {in_parallel} at a time); limit that binds: max_samples",
+    ]
+    assert budget.estimated_seconds == pytest.approx(50.0 + left)
+
+
+def test_without_a_queue_a_sample_takes_its_generation_and_its_tuning(caplog):
+    budget = model_budget(0, "search.queue_size=1")
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        budget.follow_generation(8, 4, 8.0, 4, now=budget.start + 10.0)
+    in_parallel = int(re.search(r"(\d+) at a time", caplog.text).group(1))
+    assert f"({2.0 + 6.9 / in_parallel:.1f} s a sample: a call 2.0 s, 4 new programs of 4 calls" in caplog.text
+
+
+def test_the_models_first_answers_say_when_the_time_limit_binds(caplog):
+    budget = model_budget(120)
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        budget.follow_generation(8, 4, 80.0, 4, now=budget.start + 30.0)
+    # 8 samples of 20 s (their generation) and the batch's tuning, 6.9 s each for 4 programs, 2 at a time
+    assert "limit that binds: max_seconds=120 (12 samples would take 2m53s)" in caplog.text
+    assert budget.estimated_seconds == pytest.approx(30.0 + 8 * 20.0 + 4 * 6.9 / 2)
+
+
+def test_embedded_generation_leaves_the_estimate_to_the_plan_and_the_samples(caplog):
+    budget = planned_budget(600, [0])  # llm=mutate: the plan's line holds from the start
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        budget.follow_generation(8, 4, 0.1, 4)
+    assert "estimated duration after" not in caplog.text
 
 
 def test_a_resumed_run_has_what_its_earlier_processes_left_of_the_limit():
