@@ -1,0 +1,6 @@
+# colmo best policy for a1: training score 147.63, held-out 142.78 after 147 samples
+import numpy as np
+
+def policy(obs):
+    action = np.zeros(12)
+    return action + 0.0279 * obs[22]
