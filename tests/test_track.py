@@ -442,3 +442,41 @@ def test_a_process_that_dies_mid_search_leaves_its_run_failed(store):
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert result.returncode == 1 and "the search crashed" in result.stderr
     assert MlflowClient(uri).get_run(result.stdout.strip()).info.status == "FAILED"
+
+
+def test_a_resumed_search_goes_on_in_its_mlflow_run(tmp_path, monkeypatch):
+    """A search stopped at 2 samples and resumed to 4 is one MLflow run: its table holds every
+    sample, its metrics go on at later steps, the resuming overrides are a tag."""
+    base = [sys.executable, "-m", "colmo", *TINY, "finish.render=false", "finish.simplify=false"]
+    first = subprocess.run([*base, "search.max_samples=2", f"hydra.run.dir={tmp_path / 'run'}"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert first.returncode == 0, first.stderr[-3000:]
+    again = subprocess.run(
+        [*base, "search.max_samples=4", f"resume={tmp_path / 'run'}", f"hydra.run.dir={tmp_path / 'again'}"], cwd=tmp_path, capture_output=True, text=True, timeout=600,
+    )
+    assert again.returncode == 0, again.stderr[-3000:]
+    assert "(goes on: the search resumes)" in again.stderr
+    uri = f"sqlite:///{tmp_path / 'mlruns.db'}"
+    monkeypatch.setenv("MLFLOW_TRACKING_URI", uri)  # for load_table
+    client = MlflowClient(uri)
+    [run] = client.search_runs([client.get_experiment_by_name("pendulum").experiment_id])
+    assert run.info.status == "FINISHED"
+    assert "search.max_samples=4" in run.data.tags["colmo.resumed"] and run.data.tags["colmo.run_dir"] == str((tmp_path / "run").resolve())
+    assert [m.step for m in client.get_metric_history(run.info.run_id, "samples")] == [2, 4]
+    table = client.load_table(run.info.experiment_id, "programs.json", run_ids=[run.info.run_id])
+    assert table_rows(table) == program_rows(tmp_path / "run")
+    assert [row[0] for row in program_rows(tmp_path / "run")] == [0, 1, 2, 3]
+
+
+def test_a_continued_tracker_keeps_the_rows_and_curves_logged_before(store, tmp_path, monkeypatch):
+    monkeypatch.setenv("MLFLOW_TRACKING_URI", store)
+    run = _tracked(store)
+    before = MlflowTracker(run, table_every_s=0.0)
+    for batch, score in enumerate([1.0, 3.0]):
+        before.on_batch(_report(batch, score), [_record(batch, score)])
+    before.on_finish(_summary(tmp_path, "interrupted"))
+    after = MlflowTracker(dataclasses.replace(run, continued=True), table_every_s=3600.0)
+    assert (after.steps, after.best, after.seconds, after.per_island) == ([1, 2], [1.0, 3.0], [1.0, 2.0], [[1.0, 1.0], [3.0, 1.0]])
+    after.on_batch(_report(2, 4.0), [_record(2, 4.0)])
+    after.on_finish(_summary(tmp_path, "max_samples"))
+    assert run.client.load_table(run.experiment_id, "programs.json", run_ids=[run.run_id])["sample"].tolist() == [0, 1, 2]
+    assert run.client.get_run(run.run_id).info.status == "FINISHED"

@@ -6,7 +6,8 @@
 - `sweep`: the parent run of a sweep, and its children's best scores;
 - `programs`: every sample as a row of the table `programs.json` and of the page `programs.html`;
 - `runs`: a job's run, what a search's run holds (`MlflowTracker`, the search's observer), and
-  a `colmo-optimize` job's run.
+  a `colmo-optimize` job's run;
+- `resumed`: the run a resumed search goes on in, and what it holds read back.
 """
 
 from colmo.track.backend import (

@@ -31,6 +31,9 @@ What a search's run holds:
   (`robustness.json/.csv/.png` under `robustness/`, metrics `robustness_nominal`, `robustness_worst`,
   `robustness_all_10` (every factor at 10%), `robustness_failures`); status FINISHED, KILLED (interrupted) or FAILED (the
   generator failed, or the process exited without finishing the search).
+A resumed search (`resume=`) goes on in the run its earlier processes logged into
+(`colmo.track.resumed`): reopened, its table and curves read back, the resuming overrides the
+tag `colmo.resumed`.
 
 A `colmo-optimize` run (`track_optimize`) holds the same params and tags, the metrics of its
 `result.json` (score_initial, score, heldout_score, evaluations, steps, seconds, n_params) and the
@@ -62,14 +65,16 @@ from colmo.config import OptimizeConfig, SearchConfig
 from colmo.readability import METRICS as READABILITY_METRICS
 from colmo.record import BatchReport, SampleRecord, Summary
 from colmo.store import BEST_POLICY_FILE, BEST_SO_FAR_PLOT, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
-from colmo.track.backend import FAILED, FINISHED, KILLED, browse_hint, default_tracking_uri, log_metrics, log_params, open_experiment, retry_locked
+from colmo.track.backend import FAILED, FINISHED, KILLED, RUNNING, browse_hint, default_tracking_uri, log_metrics, log_params, open_experiment, retry_locked
 from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE, program_row, programs_page
+from colmo.track.resumed import RUN_DIR_TAG, earlier_run, history
 from colmo.track.sweep import sweep_parent, update_parent
 
 log = logging.getLogger("colmo.track")
 
 TABLE_EVERY_S = 30.0
 STOP_REASON_TAG = "colmo.stop_reason"  # max_samples, max_seconds, ...: which limit a finished search reached
+RESUMED_TAG = "colmo.resumed"  # the overrides of the process that last resumed the search
 
 
 def flatten(values: dict[str, Any], prefix: str = "") -> dict[str, str]:
@@ -131,6 +136,7 @@ class TrackedRun:
     parent_id: Optional[str]
     sweep_dir: Optional[Path]
     hydra_dir: Optional[Path]  # Hydra's config files of this job
+    continued: bool = False  # the run of a resumed search's earlier processes, reopened
 
     def log_hydra_config(self) -> None:
         """Hydra's config files of this job, as the run's `hydra/` artifacts."""
@@ -143,9 +149,14 @@ class TrackedRun:
             update_parent(self.client, self.experiment_id, self.parent_id, self.sweep_dir)
 
 
-def start_run(cfg: SearchConfig | OptimizeConfig, variant: str, tags: dict[str, str], start_time: Optional[float] = None) -> TrackedRun:
+def start_run(
+    cfg: SearchConfig | OptimizeConfig, variant: str, tags: dict[str, str], start_time: Optional[float] = None, resumes: Optional[str] = None,
+) -> TrackedRun:
     """Start this Hydra job's MLflow run, as a child of its sweep's parent in a `-m` sweep;
-    `variant` is the readable middle of the run name (`pendulum-oneplusone-mutate-s0`)."""
+    `variant` is the readable middle of the run name (`pendulum-oneplusone-mutate-s0`). A search
+    that `resumes` a run directory goes on in the run its earlier processes logged into, if
+    there is one: reopened, the params it lacks added (MLflow keeps a param's first value: the
+    resumed process's overrides are the tag `colmo.resumed`)."""
     from hydra.core.hydra_config import HydraConfig
     from hydra.types import RunMode
 
@@ -170,13 +181,21 @@ def start_run(cfg: SearchConfig | OptimizeConfig, variant: str, tags: dict[str, 
         parent_id = sweep_parent(client, experiment_id, sweep_dir, f"{experiment}-sweep-{clock}", parent_tags)
         tags[MLFLOW_PARENT_RUN_ID] = parent_id
         name = f"{name}-j{hydra.job.num}"
-    run = retry_locked(
-        client.create_run, experiment_id, start_time=int(started * 1000), tags=tags, run_name=cfg.tracker.run_name or name
-    )
-    log_params(client, run.info.run_id, flatten(dataclasses.asdict(cfg)))
+    params = flatten(dataclasses.asdict(cfg))
+    earlier = earlier_run(client, experiment_id, resumes) if resumes else None
+    if earlier is not None:
+        run_id, name = earlier.info.run_id, earlier.info.run_name
+        retry_locked(client.update_run, run_id, status=RUNNING)
+        retry_locked(client.set_tag, run_id, RESUMED_TAG, tags["overrides"])
+        log_params(client, run_id, {key: value for key, value in params.items() if key not in earlier.data.params})
+    else:
+        run = retry_locked(client.create_run, experiment_id, start_time=int(started * 1000), tags=tags, run_name=cfg.tracker.run_name or name)
+        run_id, name = run.info.run_id, run.info.run_name
+        log_params(client, run_id, params)
     hydra_dir = Path(hydra.runtime.output_dir) / hydra.output_subdir if hydra.output_subdir else None  # null: no config files
-    log.info("MLflow run %s in experiment %s; browse: %s", run.info.run_name, experiment, browse_hint(uri, experiment_id))
-    return TrackedRun(client, experiment_id, run.info.run_id, run.info.run_name, parent_id, sweep_dir, hydra_dir)
+    went_on = " (goes on: the search resumes)" if earlier is not None else ""
+    log.info("MLflow run %s%s in experiment %s; browse: %s", name, went_on, experiment, browse_hint(uri, experiment_id))
+    return TrackedRun(client, experiment_id, run_id, name, parent_id, sweep_dir, hydra_dir, continued=earlier is not None)
 
 
 # -- the search's observer ------------------------------------------------------------------------
@@ -197,6 +216,10 @@ class MlflowTracker:
         self.seconds: list[float] = []
         self.best: list[float] = []
         self.per_island: list[list[float]] = []
+        if run.continued:  # the table and the curves go on from what the earlier processes logged
+            earlier = history(self.client, self.run_id)
+            self.rows, self.steps, self.seconds, self.best, self.per_island = earlier.rows, earlier.steps, earlier.seconds, earlier.best, earlier.per_island
+            self.table_registered = bool(self.rows)
         # A search that dies before on_finish must not stay RUNNING in the UI forever.
         atexit.register(self.run.end, FAILED)
 
@@ -298,9 +321,10 @@ def start_search_run(cfg: SearchConfig, run_dir: Path) -> MlflowTracker:
     search_dir = Path(cfg.resume).expanduser().resolve() if cfg.resume else run_dir  # where Search writes
     tags = {
         "task": cfg.task.name, "llm": choices["llm"], "gfo": choices["gfo"], "seed": str(cfg.seed),
-        "colmo.command": "search", "colmo.run_dir": str(search_dir),
+        "colmo.command": "search", RUN_DIR_TAG: str(search_dir),
     }
-    run = start_run(cfg, f"{cfg.task.name}-{choices['gfo']}-{choices['llm']}-s{cfg.seed}", tags)
+    variant = f"{cfg.task.name}-{choices['gfo']}-{choices['llm']}-s{cfg.seed}"
+    run = start_run(cfg, variant, tags, resumes=str(search_dir) if cfg.resume else None)
     return MlflowTracker(run, cfg.task.spec, cfg.task.env)
 
 
