@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import shlex
 import sys
 from pathlib import Path
 from typing import Optional
 
 from hydra.core.hydra_config import HydraConfig
 
-from colmo.cli import hydra_app
+from colmo.cli import hydra_app, shell_override
 from colmo.config import OpenAIConfig, SearchConfig
 from colmo.errors import RunError
 from colmo.trackers import make_tracker
@@ -93,12 +94,13 @@ def main(cfg: SearchConfig) -> Optional[float]:
     if summary.resumable and sweep_job:
         hydra = HydraConfig.get()
         sweep_dir = (Path(hydra.runtime.cwd) / hydra.sweep.dir).resolve()
-        print(f"resume the sweep with the same command and hydra.sweep.dir={sweep_dir}: finished jobs are kept, the others resumed", file=sys.stderr)
+        again = shell_override("hydra.sweep.dir", sweep_dir)
+        print(f"resume the sweep with the same command and {again}: finished jobs are kept, the others resumed", file=sys.stderr)
     elif summary.resumable:
-        overrides = " ".join(o for o in HydraConfig.get().overrides.task if not o.startswith("resume="))
-        print(f"resume with: colmo {overrides} resume={summary.run_dir}".replace("  ", " "), file=sys.stderr)
+        overrides = " ".join(shlex.quote(o) for o in HydraConfig.get().overrides.task if not o.startswith("resume="))
+        print(f"resume with: colmo {overrides} {shell_override('resume', summary.run_dir)}".replace("  ", " "), file=sys.stderr)
         if summary.best_code:  # what the finish would have made, for the best so far, without resuming
-            policy = f"task={cfg.task.name} policy_file={Path(summary.run_dir) / BEST_POLICY_FILE}"
+            policy = f"task={cfg.task.name} seed={cfg.seed} {shell_override('policy_file', Path(summary.run_dir) / BEST_POLICY_FILE)}"
             print(f"or score, simplify and film its best so far: colmo-evaluate {policy}; colmo-simplify {policy}; colmo-render {policy}", file=sys.stderr)
     if summary.failure is None:
         return summary.best_score

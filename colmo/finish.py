@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Optional, Sequence
 
 from colmo import coverage, readability
+from colmo.cli import shell_override
 from colmo.config import SearchConfig
 from colmo.coverage import Pruned
 from colmo.errors import RunError
@@ -388,7 +389,7 @@ def _simplify(
     )
     header = f"# colmo: the best policy of {cfg.task.name} simplified: training score {result.scores.train:.2f}, held-out {result.scores.heldout:.2f}\n"
     if result.cut_short:  # the finish's time ran out before a round found nothing more to delete
-        more = f"colmo-simplify task={cfg.task.name} policy_file={run_dir / BEST_POLICY_FILE}"
+        more = f"colmo-simplify task={cfg.task.name} seed={cfg.seed} {shell_override('policy_file', run_dir / BEST_POLICY_FILE)}"
         log.warning("the simplification stopped at the finish's deadline after %d round(s); to go on: %s", result.rounds, more)
         header += f"# cut short at the finish's deadline after {result.rounds} round(s); to go on: {more}\n"
     (run_dir / SIMPLIFIED_POLICY_FILE).write_text(header + result.code + "\n")

@@ -4,6 +4,7 @@ runtime failure, no traceback unless `hydra.verbose=true`) whatever Hydra flag i
 command refuses before Hydra starts is checked in process (`refused`) beyond one run of each
 kind of refusal through the console script."""
 
+import shlex
 import socket
 import subprocess
 import sys
@@ -15,7 +16,7 @@ from conftest import FakeOpenAIServer, refused
 from mlflow import MlflowClient
 
 from colmo.__main__ import main as colmo
-from colmo.cli import refusal, renamed
+from colmo.cli import refusal, renamed, shell_override
 from colmo.help import help_text
 
 BIN = Path(sys.executable).parent
@@ -125,6 +126,21 @@ def test_cfg_job_prints_the_config_or_one_error_line(tmp_path, monkeypatch):
     code, line = refused(colmo, "--cfg", "job", "task=nope")
     assert code == 2 and "Could not find 'task/nope'; available: a1, ball_in_cup, cheetah, pendulum, quadruped" in line
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("value", [
+    "outputs/pendulum/2026-12-05_12-57-08",
+    "/runs/cheetah/s0/0_llm=mutate,search.max_samples=1000000,seed=0,task=cheetah",  # a sweep job's directory
+    "/tmp/a b/it's", "/x/[1]", "~/x", "/a/$HOME/`x`", 'q"x', "a\\b",
+])
+def test_a_printed_override_reads_back_as_its_value_through_the_shell_and_hydra(value):
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    line = shell_override("resume", value)
+    [argument] = shlex.split(line)
+    override = OverridesParser.create().parse_override(argument)
+    assert (override.key_or_group, override.value()) == ("resume", value)
+    assert (line == f"resume={value}") is (value == "outputs/pendulum/2026-12-05_12-57-08")  # plain where it can be
 
 
 def test_renamed_keys_are_read_with_their_new_names(capsys):

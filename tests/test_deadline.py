@@ -80,7 +80,7 @@ def test_a_short_run_ends_within_5_s_of_its_limit_with_everything_it_promises(tm
     assert run.summary["media"]["video"] == VIDEO_FILE
     # A simplification the deadline stopped says so, with the command that goes on from the best policy.
     header = (run.run_dir / SIMPLIFIED_POLICY_FILE).read_text().split("\nimport", 1)[0]
-    go_on = f"to go on: colmo-simplify task=pendulum policy_file={run.run_dir / BEST_POLICY_FILE}"
+    go_on = f"to go on: colmo-simplify task=pendulum seed=0 policy_file={run.run_dir / BEST_POLICY_FILE}"
     assert (go_on in header) is run.summary["simplified"]["cut_short"], (header, run.summary["simplified"])
 
 

@@ -87,7 +87,7 @@ def test_a_stop_signal_finishes_the_programs_in_flight_and_loses_nothing(tmp_pat
     assert summary["samples"] >= 1 and all(status in ("evaluated", "failed", "duplicate", "unusable") for _, status, _ in stored)
     assert any(cut_short for *_, cut_short in stored)  # tuning stopped at the next candidate, its best kept
     assert (run_dir / "best_policy.py").is_file()
-    policy = f"task=pendulum policy_file={run_dir / 'best_policy.py'}"
+    policy = f"task=pendulum seed=0 policy_file={run_dir / 'best_policy.py'}"
     assert f"or score, simplify and film its best so far: colmo-evaluate {policy}; colmo-simplify {policy}; colmo-render {policy}" in stderr
 
 
