@@ -176,6 +176,17 @@ def test_a_finish_cut_to_fit_still_leaves_the_simplification_room_to_start(avail
     assert plan.render_seconds >= referee.seconds(1, 1) + 2.0  # the episode it films and a few frames
 
 
+def test_a_long_run_keeps_a_share_of_its_time_for_the_simplification():
+    referee, workers = RefereeCost(episode=0.03, batch=0.3), 2
+    least = plan_finish(compose("search", "task=cheetah", "search.max_seconds=60"), referee, workers).simplify_seconds
+    assert least > 0.03 * 60  # a short run: what the simplifier's first measurements need
+    assert plan_finish(compose("search", "task=cheetah", "search.max_seconds=1800"), referee, workers).simplify_seconds == pytest.approx(54.0)
+    assert plan_finish(compose("search", "task=cheetah", "search.max_seconds=36000"), referee, workers).simplify_seconds == 600.0  # simplify.max_seconds
+    off = compose("search", "task=cheetah", "search.max_seconds=1800", "finish.simplify_share=0")
+    assert plan_finish(off, referee, workers).simplify_seconds == pytest.approx(least)
+    assert plan_finish(compose("search", "task=cheetah", "search.max_seconds=0"), referee, workers).simplify_seconds == pytest.approx(least)  # no limit
+
+
 def test_the_referee_cost_counts_lockstep_batches_not_episodes():
     # Calibrated on 10 episodes: 0.1 s on the fast path, 0.4 s by the referee (0.3 s of round trips).
     referee = RefereeCost.of(0.1, 0.4, 10)

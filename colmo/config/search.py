@@ -59,6 +59,9 @@ class FinishConfig:
     top: int = option(3, "the best programs of a search that get a held-out score (over heldout.episodes) at its end")
     render: bool = option(True, "a video and a plot of the best policy on a held-out episode")
     simplify: bool = option(True, "the best policy simplified (simplified_policy.py; options: simplify.*)")
+    simplify_share: float = option(
+        0.03, "share of search.max_seconds kept for the simplification at least (at most simplify.max_seconds); 0: the least it needs",
+    )
     robustness: bool = option(
         False, "the best policy scored over a grid of model-mismatch magnitudes (robustness.json/.csv/.png; colmo.robustness)",
     )
@@ -73,6 +76,7 @@ class FinishConfig:
 
     def __post_init__(self) -> None:
         at_least(self, "finish", top=1)
+        require(0 <= self.simplify_share <= 0.2, f"finish.simplify_share must be in [0, 0.2], got {self.simplify_share}")
         check_robustness_grid(
             "finish.", self.robustness_episodes, self.robustness_magnitudes, self.robustness_delays, self.robustness_precision,
             self.robustness_max_episodes,
