@@ -445,16 +445,18 @@ def test_a_process_that_dies_mid_search_leaves_its_run_failed(store):
 
 
 def test_a_resumed_search_goes_on_in_its_mlflow_run(tmp_path, monkeypatch):
-    """A search stopped at 2 samples and resumed to 4 is one MLflow run: its table holds every
-    sample, its metrics go on at later steps, the resuming overrides are a tag."""
+    """A search stopped at 2 samples and resumed to 4, from another directory, is one MLflow run:
+    its table holds every sample, its metrics go on at later steps, the resuming overrides are a tag."""
     base = [sys.executable, "-m", "colmo", *TINY, "finish.render=false", "finish.simplify=false"]
     first = subprocess.run([*base, "search.max_samples=2", f"hydra.run.dir={tmp_path / 'run'}"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert first.returncode == 0, first.stderr[-3000:]
+    elsewhere = tmp_path / "elsewhere"  # resumed from another directory: the run goes on in the store it began in
+    elsewhere.mkdir()
     again = subprocess.run(
-        [*base, "search.max_samples=4", f"resume={tmp_path / 'run'}", f"hydra.run.dir={tmp_path / 'again'}"], cwd=tmp_path, capture_output=True, text=True, timeout=600,
+        [*base, "search.max_samples=4", f"resume={tmp_path / 'run'}", f"hydra.run.dir={elsewhere / 'again'}"], cwd=elsewhere, capture_output=True, text=True, timeout=600,
     )
     assert again.returncode == 0, again.stderr[-3000:]
-    assert "(goes on: the search resumes)" in again.stderr
+    assert "(goes on: the search resumes)" in again.stderr and not (elsewhere / "mlruns.db").exists()
     uri = f"sqlite:///{tmp_path / 'mlruns.db'}"
     monkeypatch.setenv("MLFLOW_TRACKING_URI", uri)  # for load_table
     client = MlflowClient(uri)

@@ -1,7 +1,9 @@
-"""A resumed search's MLflow run: the run the search's earlier processes logged into, found by
-its run directory (the tag `colmo.run_dir`), and what it already holds read back (the programs
-table and the best-so-far curves), so that the resumed process goes on in the same run instead
-of starting a second one with half the history."""
+"""A resumed search's MLflow run: the run the search's earlier processes logged into, and what it
+already holds read back (the programs table and the best-so-far curves), so that the resumed
+process goes on in the same run instead of starting a second one with half the history. A
+search's run directory names its run (`mlflow_run.json`: the tracking URI and the run's id), so
+a search resumed from another directory goes on in the store it began in; a run directory made
+before that file is found by the tag `colmo.run_dir` in the store the resume uses."""
 
 from __future__ import annotations
 
@@ -14,16 +16,41 @@ from typing import Any, Optional
 
 from mlflow import MlflowClient
 from mlflow.entities import Run
+from mlflow.exceptions import MlflowException
 
 from colmo.track.backend import retry_locked
 from colmo.track.programs import PROGRAMS_TABLE
 
 RUN_DIR_TAG = "colmo.run_dir"
+RUN_FILE = "mlflow_run.json"
 _ISLAND_METRIC = "best_score_island_"
 
 
-def earlier_run(client: MlflowClient, experiment_id: str, run_dir: str) -> Optional[Run]:
-    """The newest search run of `experiment_id` that wrote into `run_dir`; None if there is none."""
+def remember(run_dir: Path, tracking_uri: str, run_id: str) -> None:
+    """Write into a search's run directory where its MLflow run is."""
+    (run_dir / RUN_FILE).write_text(json.dumps({"tracking_uri": tracking_uri, "run_id": run_id}) + "\n")
+
+
+def remembered(run_dir: Path) -> dict[str, str]:
+    """Where the MLflow run of the search in `run_dir` is (`tracking_uri`, `run_id`); empty if it
+    does not say (made before the file, or by `tracker=none`)."""
+    try:
+        found = json.loads((run_dir / RUN_FILE).read_text())
+    except (OSError, ValueError):
+        return {}
+    return found if isinstance(found, dict) and {"tracking_uri", "run_id"} <= found.keys() else {}
+
+
+def earlier_run(client: MlflowClient, experiment_id: str, run_dir: str, run_id: Optional[str] = None) -> Optional[Run]:
+    """The search run of `experiment_id` that wrote into `run_dir`: `run_id` if the store holds
+    it, else the newest run tagged with that directory; None if there is none."""
+    if run_id is not None:
+        try:
+            run = client.get_run(run_id)
+        except MlflowException:  # another store, or the run was deleted
+            run = None
+        if run is not None and run.info.experiment_id == experiment_id and run.info.lifecycle_stage == "active":
+            return run
     quoted = run_dir.replace("\\", "\\\\").replace("'", "\\'")
     found = retry_locked(
         client.search_runs, [experiment_id], f"tags.`{RUN_DIR_TAG}` = '{quoted}' and tags.`colmo.command` = 'search'",

@@ -32,8 +32,8 @@ What a search's run holds:
   `robustness_all_10` (every factor at 10%), `robustness_failures`); status FINISHED, KILLED (interrupted) or FAILED (the
   generator failed, or the process exited without finishing the search).
 A resumed search (`resume=`) goes on in the run its earlier processes logged into
-(`colmo.track.resumed`): reopened, its table and curves read back, the resuming overrides the
-tag `colmo.resumed`.
+(`colmo.track.resumed`, named in the run directory's `mlflow_run.json`): reopened in its store,
+its table and curves read back, the resuming overrides the tag `colmo.resumed`.
 
 A `colmo-optimize` run (`track_optimize`) holds the same params and tags, the metrics of its
 `result.json` (score_initial, score, heldout_score, evaluations, steps, seconds, n_params) and the
@@ -67,7 +67,7 @@ from colmo.record import BatchReport, SampleRecord, Summary
 from colmo.store import BEST_POLICY_FILE, BEST_SO_FAR_PLOT, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
 from colmo.track.backend import FAILED, FINISHED, KILLED, RUNNING, browse_hint, default_tracking_uri, log_metrics, log_params, open_experiment, retry_locked
 from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE, program_row, programs_page
-from colmo.track.resumed import RUN_DIR_TAG, earlier_run, history
+from colmo.track.resumed import RUN_DIR_TAG, earlier_run, history, remember, remembered
 from colmo.track.sweep import sweep_parent, update_parent
 
 log = logging.getLogger("colmo.track")
@@ -137,6 +137,7 @@ class TrackedRun:
     sweep_dir: Optional[Path]
     hydra_dir: Optional[Path]  # Hydra's config files of this job
     continued: bool = False  # the run of a resumed search's earlier processes, reopened
+    tracking_uri: str = ""
 
     def log_hydra_config(self) -> None:
         """Hydra's config files of this job, as the run's `hydra/` artifacts."""
@@ -162,7 +163,8 @@ def start_run(
 
     hydra = HydraConfig.get()
     launch_dir = Path(hydra.runtime.cwd)
-    uri = cfg.tracker.tracking_uri or default_tracking_uri(launch_dir)
+    recalled = remembered(Path(resumes)) if resumes else {}  # where the resumed search's run is, from wherever it is resumed
+    uri = cfg.tracker.tracking_uri or recalled.get("tracking_uri") or default_tracking_uri(launch_dir)
     experiment = cfg.tracker.experiment or cfg.task.name
     client, experiment_id = open_experiment(uri, experiment)
     started = start_time or time.time()
@@ -182,7 +184,7 @@ def start_run(
         tags[MLFLOW_PARENT_RUN_ID] = parent_id
         name = f"{name}-j{hydra.job.num}"
     params = flatten(dataclasses.asdict(cfg))
-    earlier = earlier_run(client, experiment_id, resumes) if resumes else None
+    earlier = earlier_run(client, experiment_id, resumes, recalled.get("run_id")) if resumes else None
     if earlier is not None:
         run_id, name = earlier.info.run_id, earlier.info.run_name
         retry_locked(client.update_run, run_id, status=RUNNING)
@@ -195,7 +197,7 @@ def start_run(
     hydra_dir = Path(hydra.runtime.output_dir) / hydra.output_subdir if hydra.output_subdir else None  # null: no config files
     went_on = " (goes on: the search resumes)" if earlier is not None else ""
     log.info("MLflow run %s%s in experiment %s; browse: %s", name, went_on, experiment, browse_hint(uri, experiment_id))
-    return TrackedRun(client, experiment_id, run_id, name, parent_id, sweep_dir, hydra_dir, continued=earlier is not None)
+    return TrackedRun(client, experiment_id, run_id, name, parent_id, sweep_dir, hydra_dir, continued=earlier is not None, tracking_uri=uri)
 
 
 # -- the search's observer ------------------------------------------------------------------------
@@ -325,6 +327,7 @@ def start_search_run(cfg: SearchConfig, run_dir: Path) -> MlflowTracker:
     }
     variant = f"{cfg.task.name}-{choices['gfo']}-{choices['llm']}-s{cfg.seed}"
     run = start_run(cfg, variant, tags, resumes=str(search_dir) if cfg.resume else None)
+    remember(search_dir, run.tracking_uri, run.run_id)
     return MlflowTracker(run, cfg.task.spec, cfg.task.env)
 
 
