@@ -84,6 +84,8 @@ def main(cfg: SearchConfig) -> Optional[float]:
         summary = search.run()
     print(summary.best_code or "")
     heldout = f", held-out {summary.best_heldout_score:.2f}" if summary.best_heldout_score is not None else ""
+    if any(entry["key"] == summary.best_key and entry.get("episodes_alike") for entry in summary.heldout):
+        heldout += " (its training episodes all returned the same: held-out episodes repeat them)"
     best = "no program evaluated" if summary.best_score is None else f"best score {summary.best_score:.2f}{heldout}"
     print(
         f"{best} after {summary.samples} samples "

@@ -39,7 +39,7 @@ from colmo.config import SearchConfig
 from colmo.coverage import Pruned
 from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor
-from colmo.heldout import branch_counts, heldout_evaluator, heldout_score, robustness_of
+from colmo.heldout import alike, branch_counts, heldout_evaluator, heldout_score, robustness_of
 from colmo.names import misnamed
 from colmo.record import EVALUATED, SampleRecord, Summary, Totals
 from colmo.robustness import grid_points, save
@@ -235,11 +235,13 @@ def finish(
         store.set_heldout(record.sample, score)
         best.heldout.append({
             "sample": record.sample, "key": record.key, "score": record.score, "heldout_score": score, "heldout_failure": evaluation.failure,
-            "episodes": len(heldout.seeds),
+            "episodes": len(heldout.seeds), "episodes_alike": alike(record.returns),
         })
         log.info("sample %d: training score %.2f, held-out %s over %d episodes", record.sample, record.score, _shown(score), len(heldout.seeds))
     if not top:
         return best
+    if best.heldout and best.heldout[0]["episodes_alike"]:
+        log.warning("every training episode of the best policy returned the same: the task's episodes do not differ, so held-out scores repeat training ones")
     best.misnamed = misnamed(top[0].code, observation_names)
     took["held-out"] = time.monotonic() - step
     if cfg.finish.coverage and best.heldout:

@@ -24,3 +24,17 @@ def evaluator(seeds: tuple[int, ...]) -> Evaluator:
 )
 def test_seed_chunks_cover_the_seeds_in_order(parts, chunks):
     assert evaluator((11, 12, 13, 14, 15)).seed_chunks(parts) == chunks
+
+
+@pytest.mark.parametrize("returns, expected", [
+    ((189.1, 189.1, 189.1), True),  # an upright start every episode
+    ((1e6, 1e6 + 1e-4), True),  # equal up to float noise
+    ((189.1, 159.3), False),
+    ((189.1,), False),  # one episode tells nothing
+    ((), False),
+    (None, False),  # a program that was not scored
+])
+def test_training_episodes_that_all_returned_the_same_are_told_apart(returns, expected):
+    from colmo.heldout import alike
+
+    assert alike(returns) is expected

@@ -25,6 +25,15 @@ from colmo.rollout import episode_seeds, heldout_seeds
 from colmo.specs import Spec, load_task_spec
 
 
+def alike(returns: Optional[Sequence[float]]) -> bool:
+    """Whether a program's training episodes all returned the same: its task then draws nothing
+    at random from an episode's seed (the quadruped's upright start), and a held-out score can
+    only repeat the training score."""
+    if not returns or len(returns) < 2:
+        return False
+    return max(returns) - min(returns) <= 1e-9 * max(1.0, abs(max(returns)))
+
+
 def heldout_evaluator(evaluator: Evaluator, seed: int, episodes: int) -> Evaluator:
     """`evaluator` on `episodes` held-out episodes of run seed `seed` (time limit scaled)."""
     seeds = heldout_seeds(seed, episodes, evaluator.seeds)
