@@ -126,10 +126,8 @@ def plan_finish(cfg: SearchConfig, referee: RefereeCost, workers: int, available
 
     # The simplifier measures the best program twice on both episode sets, then a few rounds; a
     # long run keeps a share of its time for it (a winner of 65 constants needs a minute of rounds).
-    simplify = 0.0
-    if cfg.finish.simplify:
-        share = min(cfg.finish.simplify_share * cfg.search.max_seconds, cfg.simplify.max_seconds or math.inf)
-        simplify = max(6 * (heldout_cost(1, episodes) + heldout_cost(1, cfg.task.episodes)), share)
+    share = min(cfg.finish.simplify_share * cfg.search.max_seconds, cfg.simplify.max_seconds or math.inf)
+    simplify = max(6 * (heldout_cost(1, episodes) + heldout_cost(1, cfg.task.episodes)), share) if cfg.finish.simplify else 0.0
     render = episode + _RENDER_FIXED_S + _VIDEO_S if cfg.finish.render else 0.0
     grid = grid_points(cfg.finish.robustness_magnitudes, cfg.finish.robustness_delays)
     robustness = heldout_cost(grid, cfg.finish.robustness_episodes) if cfg.finish.robustness else 0.0

@@ -119,8 +119,7 @@ class Search:
         self.in_flight: deque[_Batch] = deque()
         self.counters = Counters()
         self.best_so_far: list[tuple[int, float]] = []
-        # resumed_samples: the model calls an earlier process of a resumed run settled
-        self.next_sample = self.next_batch = self.in_flight_samples = self.resumed_samples = 0
+        self.next_sample = self.next_batch = self.in_flight_samples = self.resumed_samples = 0  # resumed: model calls settled earlier
         self.generation_seconds = 0.0
         self.stop_reason = ""
         self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=tunes_constants(cfg.gfo))
@@ -254,8 +253,7 @@ class Search:
             Sample(self.next_sample + i, batch.index, answer.prompt.island, tuple(answer.prompt.parent_keys), answer.generation)
             for i, answer in enumerate(answers)
         ]
-        # Stored before any is evaluated (a full disk stops the search here, with no gap in the
-        # store's sample numbers); a run that stops before their outcomes land evaluates them on resume.
+        # Stored before any is evaluated: a full disk stops the search here, no gap in the sample numbers; a stopped run evaluates them on resume.
         self.store.add(*(SampleRecord.of(sample, PENDING) for sample in samples))
         self.next_batch += 1
         self.next_sample += len(samples)
