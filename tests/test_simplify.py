@@ -358,7 +358,22 @@ def test_constant_factors_are_merged_by_a_measured_candidate_not_folded():
     code = "def policy(obs):\n    return 1.34 * (4.69 * obs[0])"
     assert remove_dead_code(code) == code  # 1.34 * 4.69 * x would round differently
     (merged,) = [c for c in deletion_candidates(code) if c.description.startswith("merged")]
-    assert merged.code == "def policy(obs):\n    return 6.2846 * obs[0]" and merged.nodes == count_nodes(code) - 2
+    assert merged.code == "def policy(obs):\n    return 6.285 * obs[0]" and merged.nodes == count_nodes(code) - 2
+
+
+def test_a_constant_factor_is_merged_into_an_array_literal_by_a_measured_candidate():
+    # The cheetah's seed-2 winner after simplification kept `0.3349 * (np.array([...]) * obs[12])`.
+    code = "import numpy as np\n\ndef policy(obs):\n    return 0.3349 * (np.array([-0.2635, 3.418, 2]) * obs[12]) + obs[1]"
+    assert remove_dead_code(code) == code
+    (merged,) = [c for c in deletion_candidates(code) if c.description.startswith("merged")]
+    assert merged.code.endswith("return np.array([-0.08825, 1.145, 0.6698]) * obs[12] + obs[1]")
+    assert merged.nodes == count_nodes(code) - 2
+    alone = "import numpy as np\n\ndef policy(obs):\n    return obs[0] * np.array([1.5, -2.0]) * 0.5"
+    (merged,) = [c for c in deletion_candidates(alone) if c.description.startswith("merged")]
+    assert merged.code.endswith("return obs[0] * np.array([0.75, -1.0])")
+    for kept in ("np.array([1.5, obs[1]])", "np.array([1.5, -2.0], dtype=float)", "np.array([[1.5], [2.0]])", "np.zeros(2)"):
+        code = f"import numpy as np\n\ndef policy(obs):\n    return 0.5 * ({kept} * obs[0])"
+        assert not [c for c in deletion_candidates(code) if c.description.startswith("merged")], kept
 
 
 # --- the acceptance rule, with constructed scores -------------------------------------------------

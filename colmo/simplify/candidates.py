@@ -3,10 +3,10 @@
 `deletion_candidates` lists every one-step simplification: delete a statement, keep one branch
 of an `if` statement or of a conditional expression, drop a term of a sum or difference, a
 factor of a product, a divisor or an exponent, merge two constant factors (`2.0 * (3.0 * x)`
--> `6.0 * x`), unwrap a call to one of its arguments
-(`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), keep one operand of `and`/`or`, and replace a
-subexpression that no drop covers (a call argument, a compared value, an assigned or returned
-value, a branch) by 0.0 or 1.0. The last `return` of the policy is never deleted (a policy
+-> `6.0 * x`, `2.0 * (np.array([1.0, 3.0]) * x)` -> `np.array([2.0, 6.0]) * x`), unwrap a call
+to one of its arguments (`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), keep one operand of
+`and`/`or`, and replace a subexpression that no drop covers (a call argument, a compared value,
+an assigned or returned value, a branch) by 0.0 or 1.0. The last `return` of the policy is never deleted (a policy
 returning None always fails). Each candidate is cleaned by `remove_dead_code`, so what a
 deletion leaves dead goes with it, and must be strictly smaller (`colmo.astutil.node_count`);
 duplicates (same code) are dropped. Nothing here judges a candidate: scores do.
@@ -22,6 +22,7 @@ from typing import Any, Callable, Iterator, Optional
 
 from colmo import astutil
 from colmo.astutil import OPAQUE_FIELDS, is_number_literal, node_count, number_literal, strip_docstrings
+from colmo.program import DISPLAY_DIGITS
 from colmo.simplify.deadcode import FUNCTIONS, own_statements, remove_dead_code
 
 
@@ -160,25 +161,43 @@ def _inverted_clip(node: ast.Call) -> Optional[tuple[float, float]]:
     return (low, high) if low > high else None
 
 
-_MERGED_DIGITS = 6  # significant digits of a merged constant: 6.2846, not 6.284600000000001
+def _merged_literal(value: float, node: ast.AST) -> Optional[ast.expr]:
+    """`value * node` as one literal when `node` is a number literal, or as one array literal
+    when it is `np.array([...])` of number literals; each product written as a person reads constants
+    (`DISPLAY_DIGITS` significant digits: 6.285, not 6.284600000000001), so it is scored as read."""
+    if is_number_literal(node):
+        product = value * ast.literal_eval(node)
+        if not math.isfinite(product):
+            return None
+        return number_literal(float(f"{product:.{DISPLAY_DIGITS}g}") if isinstance(product, float) else product)
+    is_array = isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "array"
+    if not (is_array and isinstance(node.func.value, ast.Name) and node.func.value.id in ("np", "numpy")):
+        return None
+    if node.keywords or len(node.args) != 1 or not isinstance(node.args[0], ast.List) or not node.args[0].elts:
+        return None
+    elements = [_merged_literal(value, element) for element in node.args[0].elts]
+    if any(element is None or isinstance(element, ast.Call) for element in elements):
+        return None
+    return ast.Call(node.func, [ast.List(elements, ast.Load())], [])
 
 
 def _merged_factors(node: ast.AST) -> Optional[ast.expr]:
-    """`c1 * (c2 * x)`, in any order of the factors, as `c * x` with c = c1 * c2 to
-    `_MERGED_DIGITS` digits: one constant fewer. Not a static fold, since the product rounds
-    differently, so it is scored like a deletion."""
+    """`c1 * (c2 * x)`, in any order of the factors, as `c * x` with c = c1 * c2: one constant
+    fewer; likewise a factor taken into an array literal, `c * (np.array([a, b]) * x)` or
+    `c * np.array([a, b])` as `np.array([c*a, c*b]) * x`. Not a static fold, since the product
+    rounds differently, so it is scored like a deletion."""
     if not (isinstance(node, ast.BinOp) and isinstance(node.op, ast.Mult)):
         return None
     for literal, product in ((node.left, node.right), (node.right, node.left)):
-        if is_number_literal(literal) and isinstance(product, ast.BinOp) and isinstance(product.op, ast.Mult):
-            for inner, rest in ((product.left, product.right), (product.right, product.left)):
-                if is_number_literal(inner):
-                    value = ast.literal_eval(literal) * ast.literal_eval(inner)
-                    if not math.isfinite(value):
-                        return None
-                    if isinstance(value, float):
-                        value = float(f"{value:.{_MERGED_DIGITS}g}")
-                    return ast.BinOp(number_literal(value), ast.Mult(), rest)
+        if not is_number_literal(literal):
+            continue
+        value = ast.literal_eval(literal)
+        if not is_number_literal(product) and (merged := _merged_literal(value, product)) is not None:
+            return merged
+        if isinstance(product, ast.BinOp) and isinstance(product.op, ast.Mult):
+            for inner, rest, first in ((product.left, product.right, True), (product.right, product.left, False)):
+                if (merged := _merged_literal(value, inner)) is not None:  # the factors stay in their order
+                    return ast.BinOp(merged, ast.Mult(), rest) if first else ast.BinOp(rest, ast.Mult(), merged)
     return None
 
 
