@@ -84,7 +84,8 @@ def _score(value: Optional[float]) -> str:
 
 def comparison_lines(sweep_dir: Path, jobs: list[JobOutcome], shown_dir: Optional[Path] = None) -> list[str]:
     """The comparison `CompareJobs` prints: a heading, one line per job, the report's command."""
-    shared = set.intersection(*(set(job.overrides) for job in jobs)) if jobs else set()
+    # A setting every job shares is not a variant; a sweep of one job shows all of its own.
+    shared = set.intersection(*(set(job.overrides) for job in jobs)) if len(jobs) > 1 else set()
     variants = [" ".join(o for o in job.overrides if o not in shared) or "(all alike)" for job in jobs]
     width = max([len("variant"), *map(len, variants)])
     lines = [f"sweep {shown_dir or sweep_dir}: {len(jobs)} job{'s' * (len(jobs) != 1)}"]

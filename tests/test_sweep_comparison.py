@@ -82,6 +82,8 @@ def test_a_job_without_a_result_is_a_line_saying_why_never_a_score():
     assert len(lines) == 7  # no tracked job: no report line
     assert failure_line(jobs) == "colmo: error: 4 of 5 jobs failed (jobs 1, 2, 3, 4): no result to compare"
     assert failure_line(jobs[:1]) is None
+    (row,) = comparison_lines(Path("/runs/sweep"), jobs[:1])[2:]  # one job: its own settings, not "(all alike)"
+    assert row.split()[:3] == ["0", "task=pendulum", "seed=0"]
 
 
 def test_a_sweep_with_a_job_that_searched_nothing_runs_the_others_and_exits_1(tmp_path):
