@@ -11,9 +11,10 @@ from typing import Optional
 
 from hydra.core.hydra_config import HydraConfig
 
-from colmo.cli import hydra_app, shell_override
+from colmo.cli import hydra_app
 from colmo.config import OpenAIConfig, SearchConfig
 from colmo.errors import RunError
+from colmo.shell import shell_override
 from colmo.trackers import make_tracker
 
 

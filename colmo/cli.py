@@ -25,8 +25,6 @@ import contextlib
 import functools
 import io
 import os
-import re
-import shlex
 import sys
 import tempfile
 import threading
@@ -86,20 +84,6 @@ def _check_creatable(directory: Path) -> None:
         cause = error.strerror or type(error).__name__
         reason = f"{ancestor} is not a directory" if not ancestor.is_dir() else f"making a directory in {ancestor} fails: {cause}"
         raise ConfigError(f"cannot create the output directory {directory}: {reason}") from None
-
-
-_PLAIN = re.compile(r"[\w/.\-:+@%]+")  # a value Hydra's grammar and a shell both take as it is
-
-
-def shell_override(key: str, value: object) -> str:
-    """`key=value` as a command line to paste into a shell: a value Hydra would read as
-    something else (a sweep job's directory holds `=` and `,`) quoted for Hydra, and that
-    quoted for the shell."""
-    text = str(value)
-    if _PLAIN.fullmatch(text):
-        return f"{key}={text}"
-    override = f"{key}='" + text.replace("'", "\\'") + "'"
-    return f'"{override}"' if not set(override) & set('"$`\\!') else shlex.quote(override)
 
 
 # Config keys renamed since a release, old prefix -> new (the old names keep working, with a

@@ -34,7 +34,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Optional, Sequence
 
 from colmo import coverage, readability
-from colmo.cli import shell_override
 from colmo.config import SearchConfig
 from colmo.coverage import Pruned
 from colmo.errors import RunError
@@ -44,6 +43,7 @@ from colmo.names import misnamed
 from colmo.record import EVALUATED, SampleRecord, Summary, Totals
 from colmo.robustness import grid_points, save
 from colmo.sandbox.referee import LOCKSTEP
+from colmo.shell import shell_override
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, ProgramStore
 
 if TYPE_CHECKING:

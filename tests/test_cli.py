@@ -16,8 +16,9 @@ from conftest import FakeOpenAIServer, refused
 from mlflow import MlflowClient
 
 from colmo.__main__ import main as colmo
-from colmo.cli import refusal, renamed, shell_override
+from colmo.cli import refusal, renamed
 from colmo.help import help_text
+from colmo.shell import shell_override
 
 BIN = Path(sys.executable).parent
 TINY = ("search.max_samples=2", "gfo.budget=2", "task.episodes=1", "heldout.episodes=2", "finish.render=false", "finish.simplify=false",
