@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Optional, Sequence
 
 from colmo import coverage, readability
+from colmo.bounds import Bounds, decided_comparisons
 from colmo.config import SearchConfig
 from colmo.coverage import Pruned
 from colmo.errors import RunError
@@ -170,6 +171,7 @@ class BestPrograms:
     robustness: dict = field(default_factory=dict)
     coverage: dict = field(default_factory=dict)
     misnamed: list[str] = field(default_factory=list)
+    decided: list[str] = field(default_factory=list)
     readability: dict = field(default_factory=dict)
 
     def summary(
@@ -183,8 +185,8 @@ class BestPrograms:
             task=task, best_score=best.score if best else None, best_heldout_score=best_heldout, best_key=best.key if best else None,
             best_code=best.code if best else None, best_so_far=tuple(best_so_far), stop_reason=stop_reason, run_dir=str(run_dir),
             heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, robustness=self.robustness, coverage=self.coverage,
-            misnamed=tuple(self.misnamed), readability=self.readability, startup_seconds=startup_seconds, search_seconds=search_seconds,
-            by_generator=by_generator or {},
+            misnamed=tuple(self.misnamed), decided=tuple(self.decided), readability=self.readability, startup_seconds=startup_seconds,
+            search_seconds=search_seconds, by_generator=by_generator or {},
             **asdict(totals),
         )
 
@@ -202,11 +204,12 @@ def _left(until: float) -> float:
 
 def finish(
     cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator: Evaluator, run_dir: Path,
-    until: float = math.inf, referee: RefereeCost = RefereeCost(0.0, 0.0), observation_names: Sequence[str] = (),
+    until: float = math.inf, referee: RefereeCost = RefereeCost(0.0, 0.0), observation_names: Sequence[str] = (), observation_bounds: Bounds = (),
 ) -> BestPrograms:
     """Held-out scores of the top programs (stored with them), then the best one simplified and
     rendered, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`;
-    the best one's variables named against the spec's `observation_names` (`colmo.names`)."""
+    the best one's variables named against the spec's `observation_names` (`colmo.names`), its
+    comparisons that the code decides within the spec's `observation_bounds` listed (`colmo.bounds`)."""
     best = BestPrograms()
     warming = _warm_up_render() if cfg.finish.render else None
     started, took = time.monotonic(), {}  # seconds each step took, for the closing log line
@@ -240,7 +243,7 @@ def finish(
         return best
     if best.heldout and best.heldout[0]["episodes_alike"]:
         log.warning("every training episode of the best policy returned the same: the task's episodes do not differ, so held-out scores repeat training ones")
-    best.misnamed = misnamed(top[0].code, observation_names)
+    best.misnamed, best.decided = misnamed(top[0].code, observation_names), list(map(str, decided_comparisons(top[0].code, observation_bounds)))
     took["held-out"] = time.monotonic() - step
     if cfg.finish.coverage and best.heldout:
         step = time.monotonic()
@@ -268,7 +271,7 @@ def finish(
                 cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until - 2 * best_took, plan.reduced, hint, observation_names,
             )
             took["simplification"] = time.monotonic() - step
-    best.readability = readability.report(top[0].code, best.coverage, best.simplified, best.misnamed)
+    best.readability = readability.report(top[0].code, best.coverage, best.simplified, best.misnamed, best.decided)
     log.info("best policy's readability: %s", readability.describe(best.readability))
     if cfg.finish.render:
         step = time.monotonic()

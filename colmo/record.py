@@ -187,6 +187,7 @@ class Summary(Totals):
     robustness: dict = field(default_factory=dict)  # the best policy under model mismatch: headline scores, files in run_dir
     coverage: dict = field(default_factory=dict)  # what each branch of the best policy did (`colmo.coverage.summary`)
     misnamed: tuple[str, ...] = ()  # the best policy's variables whose names contradict the spec's (`colmo.names`)
+    decided: tuple[str, ...] = ()  # the best policy's comparisons whose outcome its code fixes (`colmo.bounds`)
     readability: dict = field(default_factory=dict)  # the best policy's readability report (`colmo.readability`)
     # This process's start-up: from the job's start to the search's first batch (imports, the
     # workers, the starter's calibration and tuning), seconds of `search.max_seconds` not searched;

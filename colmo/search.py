@@ -164,7 +164,8 @@ class Search:
             if self.database is not None and self.stop_reason in FINISHED:  # a stopped run finishes when resumed
                 best = finish(
                     self.cfg, self.store, self.executor, self.evaluator, self.run_dir,
-                    until=self.budget.finish_by(), referee=self.budget.finish_referee_cost, observation_names=self.spec.observation_names,
+                    until=self.budget.finish_by(), referee=self.budget.finish_referee_cost,
+                    observation_names=self.spec.observation_names, observation_bounds=self.spec.observation_bounds,
                 )
             best_program = self.database.best if self.database else None
             summary = best.summary(

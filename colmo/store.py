@@ -316,7 +316,9 @@ def write_outputs(summary: Summary, run_dir: Path) -> None:
             header = (
                 f"# colmo best policy for {summary.task}: training score {summary.best_score:.2f}{heldout}"
                 f" after {summary.samples} samples\n"
-            ) + "".join(f"# misleading name: {line}\n" for line in summary.misnamed)
+            ) + "".join(f"# misleading name: {line}\n" for line in summary.misnamed) + "".join(
+                f"# decided by the code: {line}\n" for line in summary.decided
+            )
             (run_dir / BEST_POLICY_FILE).write_text(header + _with_coverage(summary.best_code, summary.coverage))
     except OSError as error:
         log.error("cannot write the run's outputs to %s: %s", run_dir, error)

@@ -54,7 +54,7 @@ def log_run(client, experiment_id, index: int, run: Logged, *overrides: str, sta
         metrics.append(Metric("best_heldout_score", run.heldout, START, 8))
     if run.method == "oneplusone":  # the best policy's readability report, logged at the end
         readable = {"lines": 9, "parameters": 6, "simplified_lines": 4, "simplified_parameters": 3, "branches": 2, "branches_never_taken": 1}
-        metrics += [Metric(f"readability_{name}", value, START, 8) for name, value in (readable | {"clips_at_a_limit": 0, "divisions_by_zero": 2, "misleading_names": 1}).items()]
+        metrics += [Metric(f"readability_{name}", value, START, 8) for name, value in (readable | {"clips_at_a_limit": 0, "divisions_by_zero": 2, "misleading_names": 1, "comparisons_decided": 3}).items()]
     log_params(client, run_id, params)  # as colmo's tracker logs them: in batches, not a transaction each
     client.log_batch(run_id, metrics=metrics)
     with tempfile.TemporaryDirectory() as scratch:
@@ -150,11 +150,11 @@ def test_each_runs_best_policy_has_its_readability_row(store, monkeypatch):
     rows = table(report(cwd, monkeypatch, "out=readable"), "Readability of each run's best policy")
     assert rows[0] == [
         "Run", "Variant", "Lines", "Parameters", "Simplified lines", "Simplified parameters", "Branches never taken", "Clips at a limit",
-        "Divisions by zero", "Misleading names",
+        "Divisions by zero", "Misleading names", "Comparisons decided",
     ]
     by_run = {row[0]: row[2:] for row in rows[1:]}
-    assert by_run["opo-s1"] == ["9", "6", "4", "3", "1 of 2", "0", "2", "1"]
-    assert by_run["none-s0"] == ["—"] * 8  # a run that logged none (an older colmo's)
+    assert by_run["opo-s1"] == ["9", "6", "4", "3", "1 of 2", "0", "2", "1", "3"]
+    assert by_run["none-s0"] == ["—"] * 9  # a run that logged none (an older colmo's)
 
 
 def test_every_run_is_accounted_for(store, monkeypatch):

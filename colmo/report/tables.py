@@ -178,11 +178,11 @@ def readability_table(tasks: dict[str, list[Variant]]) -> list[str]:
     """Per run, its best policy's readability report (`colmo.readability`, the
     `readability_*` metrics): lines and parameters as found and as simplified, branches decided
     the same way at every test, clips that return a limit for every value, divisions by zero,
-    misleading names."""
+    misleading names, comparisons the code decides."""
     lines = [
         "| Run | Variant | Lines | Parameters | Simplified lines | Simplified parameters | Branches never taken | Clips at a limit "
-        "| Divisions by zero | Misleading names |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| Divisions by zero | Misleading names | Comparisons decided |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for variants in tasks.values():
         for variant in variants:
@@ -192,7 +192,8 @@ def readability_table(tasks: dict[str, list[Variant]]) -> list[str]:
                 never = cell("branches_never_taken") + ("" if metrics.get("readability_branches") is None else f" of {cell('branches')}")
                 lines.append(
                     f"| {run.run.info.run_name} | {variant.name} | {cell('lines')} | {cell('parameters')} | {cell('simplified_lines')} | "
-                    f"{cell('simplified_parameters')} | {never} | {cell('clips_at_a_limit')} | {cell('divisions_by_zero')} | {cell('misleading_names')} |"
+                    f"{cell('simplified_parameters')} | {never} | {cell('clips_at_a_limit')} | {cell('divisions_by_zero')} | {cell('misleading_names')} | "
+                    f"{cell('comparisons_decided')} |"
                 )
     return lines
 

@@ -20,7 +20,7 @@ import importlib.util
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, Optional
 
 from colmo import astutil
 from colmo.names import observation_in_code
@@ -44,6 +44,8 @@ class Spec:
     make_environment: Callable[..., Environment]
     allowed_imports: tuple[str, ...]
     observation_names: tuple[str, ...] = ()  # `OBSERVATION_NAMES`: a name per observation entry, if the spec gives them
+    # `OBSERVATION_BOUNDS`: per entry, (low, high) that it never leaves, or None (`colmo.bounds`)
+    observation_bounds: tuple[Optional[tuple[float, float]], ...] = ()
 
     @property
     def prompt_text(self) -> str:
@@ -104,8 +106,24 @@ def load_spec(name_or_path: str) -> Spec:
     names = getattr(module, "OBSERVATION_NAMES", ())
     if not isinstance(names, (tuple, list)) or not all(isinstance(n, str) and n.isidentifier() for n in names):
         raise SpecError(f"{path}: OBSERVATION_NAMES must be a tuple of Python identifiers, one per observation entry")
+    bounds = _observation_bounds(getattr(module, "OBSERVATION_BOUNDS", ()), path)
     # Any MuJoCo spec takes `task.perturb` through the reserved option, unknown to its make_environment.
-    return Spec(path.stem, path, description, starter, perturbable(make_environment), allowed, tuple(names))
+    return Spec(path.stem, path, description, starter, perturbable(make_environment), allowed, tuple(names), bounds)
+
+
+def _observation_bounds(bounds: object, path: Path) -> tuple[Optional[tuple[float, float]], ...]:
+    """A spec's `OBSERVATION_BOUNDS`, checked: per entry, None or a pair of numbers low <= high."""
+    def pair(bound: object) -> Optional[tuple[float, float]]:
+        if bound is None:
+            return None
+        if isinstance(bound, (tuple, list)) and len(bound) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in bound):
+            if bound[0] <= bound[1]:
+                return (float(bound[0]), float(bound[1]))
+        raise SpecError(f"{path}: OBSERVATION_BOUNDS must hold, per observation entry, None or (low, high) with low <= high; got {bound!r}")
+
+    if not isinstance(bounds, (tuple, list)):
+        raise SpecError(f"{path}: OBSERVATION_BOUNDS must be a tuple with one entry per observation entry")
+    return tuple(pair(bound) for bound in bounds)
 
 
 def load_task_spec(name_or_path: str) -> Spec:

@@ -18,6 +18,7 @@ OBSERVATION_NAMES = (
     "sin_theta",
     "angular_velocity",
 )
+OBSERVATION_BOUNDS = ((-1.0, 1.0), (-1.0, 1.0), None)  # a cosine and a sine; the velocity has no bound
 
 
 def make_environment(**options) -> PendulumSwingup:
