@@ -21,15 +21,24 @@ from dataclasses import dataclass
 from typing import Optional, Sequence
 
 from colmo import astutil
-from colmo.astutil import is_number_literal
+from colmo.astutil import bindings, is_number_literal
+from colmo.simplify.scope import Scope
 
 Bounds = Sequence[Optional[tuple[float, float]]]  # a spec's OBSERVATION_BOUNDS: per entry, (low, high) or None
 _ANY = (-math.inf, math.inf)
-_UNIT = (-1.0, 1.0)
-_MONOTONE = {  # functions that keep the order of their argument, by their last dotted name
-    "tanh": math.tanh, "arctan": math.atan, "atan": math.atan, "sign": lambda x: float((x > 0) - (x < 0)),
+_FUNCTIONS = {  # what a call computes, by the dotted name it resolves to (`colmo.simplify.scope`)
+    **dict.fromkeys(("builtins.abs", "numpy.abs", "numpy.absolute", "numpy.fabs", "math.fabs"), "abs"),
+    **dict.fromkeys(("numpy.cos", "numpy.sin", "math.cos", "math.sin"), "unit"),
+    **dict.fromkeys(("numpy.tanh", "math.tanh"), "tanh"),
+    **dict.fromkeys(("numpy.arctan", "math.atan"), "arctan"),
+    **dict.fromkeys(("numpy.arctan2", "math.atan2"), "arctan2"),
+    **dict.fromkeys(("numpy.sqrt", "math.sqrt"), "sqrt"),
+    **dict.fromkeys(("numpy.exp", "math.exp"), "exp"),
+    "numpy.sign": "sign", "numpy.clip": "clip",
+    **dict.fromkeys(("builtins.max", "numpy.maximum"), "max"),
+    **dict.fromkeys(("builtins.min", "numpy.minimum"), "min"),
 }
-_PERIODIC_UNIT = {"cos", "sin"}  # any argument: [-1, 1]
+_MONOTONE = {"tanh": math.tanh, "arctan": math.atan, "sign": lambda x: float((x > 0) - (x < 0))}  # they keep the order
 _OPERATORS = {ast.Lt: "<", ast.LtE: "<=", ast.Gt: ">", ast.GtE: ">="}
 
 
@@ -67,13 +76,13 @@ def _product(a: tuple[float, float], b: tuple[float, float]) -> tuple[float, flo
 class _Ranges:
     """The range of each expression of one policy function."""
 
-    def __init__(self, function: ast.FunctionDef, bounds: Bounds):
-        self.bounds = list(bounds)
+    def __init__(self, function: ast.FunctionDef, bounds: Bounds, scope: Scope):
+        self.bounds, self.scope = list(bounds), scope
         self.observation = function.args.args[0].arg if function.args.args else None
         counts: dict[str, int] = {}
         self.values: dict[str, ast.expr] = {}
         for node in ast.walk(function):
-            for name in _bound_names(node):
+            for name in bindings(node):  # `global x` counts too: x can change between calls
                 counts[name] = counts.get(name, 0) + 1
             if isinstance(node, ast.Assign) and len(node.targets) == 1:
                 target = node.targets[0]
@@ -85,8 +94,7 @@ class _Ranges:
                             self.values[element.id] = ast.Subscript(node.value, ast.Constant(index), ast.Load())
         # Only a name bound exactly once has one value. Entries keep their bounds only while nothing
         # can change them: the observation's name never rebound, nothing written into a subscript.
-        shared = {name for node in ast.walk(function) if isinstance(node, (ast.Global, ast.Nonlocal)) for name in node.names}
-        self.values = {name: value for name, value in self.values.items() if counts.get(name) == 1 and name not in shared | {self.observation}}
+        self.values = {name: value for name, value in self.values.items() if counts.get(name) == 1 and name != self.observation}
         written = any(isinstance(node, ast.Subscript) and isinstance(node.ctx, ast.Store) for node in ast.walk(function))
         if written or counts.get(self.observation or "", 0) != 1:
             self.bounds = []
@@ -146,16 +154,16 @@ class _Ranges:
         return _ANY
 
     def _call(self, node: ast.Call) -> tuple[float, float]:
-        name = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", None)
+        name = _FUNCTIONS.get(self.scope.resolve(node.func) or "")
         args = [self.of(arg) for arg in node.args]
-        if name in ("abs", "fabs") and len(args) == 1:
+        if name == "abs" and len(args) == 1:
             low, high = args[0]
             return (0.0 if low <= 0 <= high else min(abs(low), abs(high)), max(abs(low), abs(high)))
-        if name in _PERIODIC_UNIT and len(args) == 1:
-            return _UNIT
+        if name == "unit" and len(args) == 1:  # a cosine or a sine
+            return (-1.0, 1.0)
         if name in _MONOTONE and len(args) == 1:
             return (_MONOTONE[name](args[0][0]), _MONOTONE[name](args[0][1]))
-        if name in ("arctan2", "atan2") and len(args) == 2:
+        if name == "arctan2" and len(args) == 2:
             return (-math.pi, math.pi)
         if name == "sqrt" and len(args) == 1 and args[0][0] >= 0:
             return (math.sqrt(args[0][0]), math.sqrt(args[0][1]))
@@ -164,22 +172,11 @@ class _Ranges:
         if name == "clip" and len(args) == 3:  # numpy's is min(max(x, low), high), rising in each: inverted limits too
             (x_low, x_high), (low_low, low_high), (high_low, high_high) = args
             return (min(max(x_low, low_low), high_low), min(max(x_high, low_high), high_high))
-        if name in ("max", "maximum") and len(args) == 2:
+        if name == "max" and len(args) == 2:
             return (max(args[0][0], args[1][0]), max(args[0][1], args[1][1]))
-        if name in ("min", "minimum") and len(args) == 2:
+        if name == "min" and len(args) == 2:
             return (min(args[0][0], args[1][0]), min(args[0][1], args[1][1]))
         return _ANY
-
-
-def _bound_names(node: ast.AST) -> list[str]:
-    """The names a statement or expression (re)binds: assignments of every kind, loop and `with`
-    targets, walrus, function arguments."""
-    if isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign, ast.For, ast.NamedExpr, ast.withitem, ast.comprehension)):
-        targets = node.targets if isinstance(node, ast.Assign) else [getattr(node, "target", None) or getattr(node, "optional_vars", None)]
-        return [n.id for target in targets if target is not None for n in ast.walk(target) if isinstance(n, ast.Name)]
-    if isinstance(node, ast.arg):
-        return [node.arg]
-    return []
 
 
 def decided_comparisons(code: str, bounds: Bounds = (), function_name: str = "policy") -> list[Decided]:
@@ -193,7 +190,7 @@ def decided_comparisons(code: str, bounds: Bounds = (), function_name: str = "po
     function = astutil.function(tree, function_name)
     if function is None:
         return []
-    ranges = _Ranges(function, bounds)
+    ranges = _Ranges(function, bounds, Scope(tree))
     found = []
     for node in ast.walk(function):
         if not isinstance(node, ast.Compare) or not all(type(op) in _OPERATORS for op in node.ops):

@@ -61,6 +61,8 @@ UNDECIDED = [
     policy("return 1.0 if obs[1] / obs[0] > 1e9 else 0.0"),  # a divisor that can be 0
     policy("return 1.0 if abs(obs[2]) == -1.0 else 0.0"),  # equality: not an ordering
     policy("return 1.0 if 2.0 > 1.0 else 0.0"),  # literals only: constant folding's, not the program's
+    "def cos(x):\n    return 5.0 * x\n\ndef policy(obs):\n    return 1.0 if cos(obs[2]) > 1.5 else 0.0\n",  # not numpy's cos
+    policy("np = Helper()", "return 1.0 if np.cos(obs[2]) > 1.5 else 0.0"),  # `np` is not numpy here
     "x = 3.0\n\ndef policy(obs):\n    global x\n    if x > 5.0:\n        return 1.0\n    x = obs[0]\n    return 0.0\n",  # a global
 ]
 
