@@ -133,6 +133,8 @@ def test_colmo_evaluate_prints_the_policy_with_its_branch_counts(tmp_path):
     assert "    # coverage: if `cos_theta > 1.5`: true 0% of 3,000 tests (never true)\n    if cos_theta > 1.5:" in result.stdout
     counted = last_json_line(result.stdout)["coverage"]
     assert counted["episodes"] == 3 and [site["kind"] for site in counted["sites"]] == ["if", "conditional", "if", "where", "clip"]
+    said = "`cos_theta > 1.5` is never true (`cos_theta` is in [-1, 1])"  # read from the code and the spec's bounds
+    assert f"decided by the code: {said}\n" in result.stdout and last_json_line(result.stdout)["decided"] == [said]
 
 
 def test_pruning_keeps_the_side_of_each_branch_that_ran_and_nothing_undecided():

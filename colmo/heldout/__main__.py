@@ -10,7 +10,9 @@ fails exits 1. With `robustness=true` it also scores the policy under model mism
 table, writes `robustness.{json,csv,png}` into the run directory and adds `robustness` (one
 entry per magnitude, nominal first) and `delay` to the JSON line. With `coverage=true` it
 counts what each branch of the policy did over the held-out episodes (`colmo.coverage`), prints
-the policy with those counts as comments and adds `coverage` to the JSON line.
+the policy with those counts as comments and adds `coverage` to the JSON line. Every comparison
+that the policy's code decides within the spec's observation bounds (`colmo.bounds`) is printed,
+`decided by the code: ...`, and listed in the JSON line's `decided`.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import sys
 from pathlib import Path
 
 from colmo import coverage
+from colmo.bounds import decided_comparisons
 from colmo.cli import hydra_app
 from colmo.config import EvaluateConfig
 from colmo.heldout import heldout_score, robustness_of
@@ -58,6 +61,9 @@ def main(cfg: EvaluateConfig) -> None:
     if counted is not None:
         print(counted.pop("annotated"))
         result["coverage"] = counted
+    result["decided"] = [str(d) for d in decided_comparisons(instantiate(program.skeleton, program.values), session.spec.observation_bounds)]
+    for line in result["decided"]:
+        print(f"decided by the code: {line}")
     print_result(result)
     if evaluation.failure:
         sys.exit(1)
