@@ -8,11 +8,12 @@
 #   cheetah/cma         GFO CMA-ES instead of (1+1)-ES
 #   cheetah/episodes20  20 training episodes instead of 10 (its winners lost 20-90 held-out)
 #   quadruped/cma       GFO CMA-ES
+#   quadruped/noise     starts whose hinges are up to 0.05 rad off (episodes that differ, so held-out scores say something)
 #   a1/default          the Unitree A1 (MENAGERIE_ROOT: a Menagerie tree with unitree_a1)
 # Each run is a one-job sweep into its own directory, so running this again keeps what finished
 # and resumes the rest (a resumed run's time limit is the whole run's).
 #
-#   scripts/locomotion_experiment.sh OUT [SEED [TASK/VARIANT ...]]   all six variants unless named
+#   scripts/locomotion_experiment.sh OUT [SEED [TASK/VARIANT ...]]   all seven variants unless named
 #   python scripts/mixed_summary.py OUT        the table (its comparison is with a `mutate` variant, if any)
 set -u
 out=$(mkdir -p "$1" && cd "$1" && pwd)
@@ -31,4 +32,5 @@ run quadruped default
 run cheetah cma gfo=cma
 run cheetah episodes20 task.episodes=20
 run quadruped cma gfo=cma
+run quadruped noise +task.env.joint_noise=0.05
 run a1 default

@@ -160,7 +160,8 @@ def write_report(
         "",
         "Lines and parameters as the search found it and as the simplifier left it; its branches decided the same way at every "
         "test over the training and held-out episodes (one side never taken); clips that returned a limit for every value; "
-        "variables whose names contradict the task's (`colmo.readability`).",
+        "divisions by zero; variables whose names contradict the task's; comparisons the code decides, read from the code "
+        "(`colmo.readability`).",
         "",
         *readability_table(tasks),
         "",
