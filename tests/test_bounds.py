@@ -2,6 +2,7 @@
 and a spec's observation bounds, each decision checked against the policy run on observations
 within the bounds; what is not certain is never flagged; the best policy's header lists them."""
 
+import ast
 import dataclasses
 
 import numpy as np
@@ -100,3 +101,36 @@ def test_the_best_policy_lists_the_comparisons_its_code_decides(tmp_path):
     assert header[1] == "# decided by the code: `abs(angle) < -0.73` is never true (`abs(angle)` is in [0, 1])"
     readable = report(code, {}, {}, [], decided)
     assert readable["comparisons_decided"] == 1 and describe(readable).endswith("1 comparison(s) the code decides")
+
+
+def _random_expression(rng: np.random.Generator, depth: int) -> str:
+    if depth == 0 or rng.random() < 0.25:
+        return f"obs[{rng.integers(3)}]" if rng.random() < 0.6 else f"{rng.uniform(-3, 3):.3g}"
+    a, b = _random_expression(rng, depth - 1), _random_expression(rng, depth - 1)
+    forms = [
+        f"-({a})", f"abs({a})", f"np.cos({a})", f"np.tanh({a})", f"np.sqrt(abs({a}))", f"np.arctan2({a}, {b})",
+        f"np.clip({a}, {rng.uniform(-2, 2):.3g}, {rng.uniform(-2, 2):.3g})", f"({a}) + ({b})", f"({a}) - ({b})",
+        f"({a}) * ({b})", f"({a}) ** 2", f"({a}) ** 3", f"max({a}, {b})", f"np.minimum({a}, {b})", f"({a}) / 4.0",
+        f"({a}) if ({b}) > 0 else ({b})",
+    ]
+    return forms[rng.integers(len(forms))]
+
+
+def test_every_decision_on_random_expressions_holds_on_every_observation():
+    rng = np.random.default_rng(1)
+    samples = observations(400)
+    decided_count = 0
+    for _ in range(400):
+        op = ["<", "<=", ">", ">="][rng.integers(4)]
+        code = policy(f"return 1.0 if ({_random_expression(rng, 3)}) {op} {rng.uniform(-3, 3):.3g} else 0.0")
+        outer = ast.unparse(ast.parse(code).body[1].body[0].value.test)  # the returned test; inner ones may be decided too
+        decided = [d for d in decided_comparisons(code, PENDULUM) if d.text == outer]
+        if not decided:
+            continue
+        decided_count += 1
+        namespace: dict = {}
+        exec(code, namespace)
+        with np.errstate(all="ignore"):
+            outcomes = {float(namespace["policy"](obs)) for obs in samples}
+        assert outcomes == {float(decided[0].outcome)}, (code, str(decided[0]))
+    assert decided_count >= 40  # the check saw many decisions, not a handful
