@@ -2,7 +2,7 @@
 
 A model writes `if abs(angle) < -0.73:` or `if cos_theta > 1.5:`, a balance branch that can
 never run, and the code reads as if it balanced. `decided_comparisons` finds such tests without
-running anything: each expression gets the range of values it can take (`Range`), from number
+running anything: each expression gets the range of values it can take (a `(low, high)` pair), from number
 literals, from the observation's entries (a spec's `OBSERVATION_BOUNDS`: a `(low, high)` pair
 or None per entry, e.g. `cos θ` in [-1, 1]; an entry without bounds can be any number), from
 names assigned once in the policy, and through arithmetic and the functions whose range is known
@@ -39,7 +39,7 @@ _FUNCTIONS = {  # what a call computes, by the dotted name it resolves to (`colm
     **dict.fromkeys(("builtins.min", "numpy.minimum"), "min"),
 }
 _MONOTONE = {"tanh": math.tanh, "arctan": math.atan, "sign": lambda x: float((x > 0) - (x < 0))}  # they keep the order
-_OPERATORS = {ast.Lt: "<", ast.LtE: "<=", ast.Gt: ">", ast.GtE: ">="}
+_OPERATORS = (ast.Lt, ast.LtE, ast.Gt, ast.GtE)  # orderings; `==` and `is` are left alone
 
 
 @dataclass(frozen=True)
@@ -198,12 +198,13 @@ def decided_comparisons(code: str, bounds: Bounds = (), function_name: str = "po
         operands = [node.left, *node.comparators]
         if all(is_number_literal(operand) for operand in operands):
             continue  # a literal comparison is constant folding's, and says nothing of the program
-        for op, left, right in zip(node.ops, operands, operands[1:]):
-            outcome = _decide(type(op), ranges.of(left), ranges.of(right))
-            if outcome is not None:
-                why = ", ".join(f"`{_short(side)}` is {_range_text(ranges.of(side))}" for side in (left, right) if not is_number_literal(side))
-                found.append(Decided(node.lineno, ast.unparse(node), outcome, why))
-                break
+        # A chain `a < b < c` is never true if one link never is, always true only if every link always is.
+        links = [(_decide(type(op), ranges.of(left), ranges.of(right)), left, right) for op, left, right in zip(node.ops, operands, operands[1:])]
+        deciding = [link for link in links if link[0] is False] or (links if all(link[0] for link in links) else [])
+        if deciding:
+            outcome, left, right = deciding[0]
+            why = ", ".join(f"`{_short(side)}` is {_range_text(ranges.of(side))}" for side in (left, right) if not is_number_literal(side))
+            found.append(Decided(node.lineno, ast.unparse(node), outcome, why))
     return sorted(found, key=lambda decided: decided.line)
 
 

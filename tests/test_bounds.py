@@ -39,6 +39,7 @@ DECIDED = [
     (policy("k = np.sqrt(obs[2] ** 2 + 1.0)", "return 1.0 if k < 0.9 else 0.0"), False, "`k` is in [1, inf]"),
     (policy("return 1.0 if max(obs[1], 2.0) > 1.5 else 0.0"), True, "`max(obs[1], 2.0)` is always 2"),
     (policy("return 1.0 if -0.5 <= obs[0] / 2.0 <= 0.5 else 0.0"), True, "`obs[0] / 2.0` is in [-0.5, 0.5]"),
+    (policy("return 1.0 if 2.0 < obs[0] < 5.0 else 0.0"), False, "`obs[0]` is in [-1, 1]"),  # one link never true
 ]
 
 
@@ -61,6 +62,7 @@ UNDECIDED = [
     policy("obs = obs * 4.0", "return 1.0 if obs[0] > 1.5 else 0.0"),  # the observation rebound
     policy("return 1.0 if obs[1] / obs[0] > 1e9 else 0.0"),  # a divisor that can be 0
     policy("return 1.0 if abs(obs[2]) == -1.0 else 0.0"),  # equality: not an ordering
+    policy("return 1.0 if -2.0 < obs[0] < 0.5 else 0.0"),  # a chain: one link always true, the other not decided
     policy("return 1.0 if 2.0 > 1.0 else 0.0"),  # literals only: constant folding's, not the program's
     "def cos(x):\n    return 5.0 * x\n\ndef policy(obs):\n    return 1.0 if cos(obs[2]) > 1.5 else 0.0\n",  # not numpy's cos
     policy("np = Helper()", "return 1.0 if np.cos(obs[2]) > 1.5 else 0.0"),  # `np` is not numpy here
