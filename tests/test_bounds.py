@@ -124,7 +124,10 @@ def test_every_decision_on_random_expressions_holds_on_every_observation():
     decided_count = 0
     for _ in range(400):
         op = ["<", "<=", ">", ">="][rng.integers(4)]
-        code = policy(f"return 1.0 if ({_random_expression(rng, 3)}) {op} {rng.uniform(-3, 3):.3g} else 0.0")
+        test = f"({_random_expression(rng, 3)}) {op} {rng.uniform(-3, 3):.3g}"
+        if rng.random() < 0.3:  # a chain: `c < e < d`
+            test = f"{rng.uniform(-3, 3):.3g} {op} {test}"
+        code = policy(f"return 1.0 if {test} else 0.0")
         outer = ast.unparse(ast.parse(code).body[1].body[0].value.test)  # the returned test; inner ones may be decided too
         decided = [d for d in decided_comparisons(code, PENDULUM) if d.text == outer]
         if not decided:
