@@ -10,10 +10,11 @@
 #   quadruped/cma       GFO CMA-ES
 #   quadruped/noise     starts whose hinges are up to 0.05 rad off (episodes that differ, so held-out scores say something)
 #   a1/default          the Unitree A1 (MENAGERIE_ROOT: a Menagerie tree with unitree_a1)
+#   a1/cma              GFO CMA-ES on the A1
 # Each run is a one-job sweep into its own directory, so running this again keeps what finished
 # and resumes the rest (a resumed run's time limit is the whole run's).
 #
-#   scripts/locomotion_experiment.sh OUT [SEED [TASK/VARIANT ...]]   all seven variants unless named
+#   scripts/locomotion_experiment.sh OUT [SEED [TASK/VARIANT ...]]   all eight variants unless named
 #   python scripts/mixed_summary.py OUT        the table (its comparison is with a `mutate` variant, if any)
 set -u
 out=$(mkdir -p "$1" && cd "$1" && pwd)
@@ -34,3 +35,4 @@ run cheetah episodes20 task.episodes=20
 run quadruped cma gfo=cma
 run quadruped noise +task.env.joint_noise=0.05
 run a1 default
+run a1 cma gfo=cma
