@@ -650,6 +650,19 @@ def test_llamacpp_loads_the_model_once_and_samples_the_batch_with_fresh_seeds(fa
     assert all(g.seconds >= 0 for g in generations) and llm.closed
 
 
+def test_llamacpp_logs_the_instruction_sets_its_build_uses(fake_llama_cpp, gguf, caplog):
+    # A seed's answers can differ between machines whose builds differ: the run's log says which it had.
+    fake_llama_cpp.llama_print_system_info = lambda: b"CPU : SSE3 = 1 | AVX = 1 | AVX2 = 0 | FMA = 1 | "
+    with caplog.at_level(logging.INFO, logger="colmo.generate"):
+        make_generator(LlamaCppConfig(model_path=gguf), seed=0).close()
+    assert "llama.cpp built for SSE3 AVX FMA)" in caplog.text
+    del fake_llama_cpp.llama_print_system_info  # a module without it
+    caplog.clear()
+    with caplog.at_level(logging.INFO, logger="colmo.generate"):
+        make_generator(LlamaCppConfig(model_path=gguf), seed=0).close()
+    assert "llama.cpp built for unknown)" in caplog.text
+
+
 def test_a_regenerated_duplicate_is_sampled_hotter_up_to_max_temperature(fake_llama_cpp, gguf):
     cfg = LlamaCppConfig(model_path=gguf, temperature=0.8, retry_temperature_step=0.3, max_temperature=1.2)
     generator = make_generator(cfg, seed=0)

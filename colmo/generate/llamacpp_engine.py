@@ -26,6 +26,19 @@ from colmo.generate.base import GENERATORS, Generation, GeneratorError, Language
 from colmo.prompt import COMPLETION_STOP, Prompt
 
 
+def built_for(llama_cpp: Any) -> str:
+    """The instruction sets this llama.cpp build uses (`AVX2 FMA ...`, from its system info), or
+    "unknown". Where two machines' builds differ, the same seed can give other answers: their
+    arithmetic rounds differently."""
+    try:
+        info = llama_cpp.llama_print_system_info()
+    except Exception:  # an older or stand-in module without it
+        return "unknown"
+    info = info.decode(errors="replace") if isinstance(info, bytes) else str(info)
+    features = [name.strip() for name, _, value in (item.partition("=") for item in info.split("|")) if value.strip() == "1"]
+    return " ".join(name.split(":")[-1].strip() for name in features) or "unknown"
+
+
 @GENERATORS.register("llamacpp")
 class LlamaCppGenerator(LanguageModelGenerator):
     """A `llama_cpp.Llama` in this process; the batch is `n` completions sampled in turn."""
@@ -55,7 +68,10 @@ class LlamaCppGenerator(LanguageModelGenerator):
                 self._llm = llama_cpp.Llama.from_pretrained(repo_id=cfg.repo_id, filename=cfg.filename, **options)
         except Exception as error:  # a missing or corrupt file, no network, an unknown architecture
             raise GeneratorError(f"llama.cpp could not load {source}: {describe_error(error)}") from error
-        logger.info("llamacpp: loaded %s in %.1fs (%d threads, n_ctx %d)", source, time.perf_counter() - start, cfg.n_threads, cfg.n_ctx)
+        logger.info(
+            "llamacpp: loaded %s in %.1fs (%d threads, n_ctx %d; llama.cpp built for %s)",
+            source, time.perf_counter() - start, cfg.n_threads, cfg.n_ctx, built_for(llama_cpp),
+        )
         self._end_of_text = self._llm.token_eos()
         self._until_cancelled = llama_cpp.LogitsProcessorList([self._end_if_cancelled])
 
