@@ -30,13 +30,15 @@ def built_for(llama_cpp: Any) -> str:
     """The instruction sets this llama.cpp build uses (`AVX2 FMA ...`, from its system info), or
     "unknown". Where two machines' builds differ, the same seed can give other answers: their
     arithmetic rounds differently."""
-    try:
-        info = llama_cpp.llama_print_system_info()
-    except Exception:  # an older or stand-in module without it
+    system_info = getattr(llama_cpp, "llama_print_system_info", None)  # absent from older or stand-in modules
+    if system_info is None:
         return "unknown"
+    info = system_info()
     info = info.decode(errors="replace") if isinstance(info, bytes) else str(info)
-    features = [name.strip() for name, _, value in (item.partition("=") for item in info.split("|")) if value.strip() == "1"]
-    return " ".join(name.split(":")[-1].strip() for name in features) or "unknown"
+    # "CPU : SSE3 = 1 | AVX = 1 | AVX2 = 0 | ...": the names set to 1, the "CPU :" prefix dropped.
+    items = (item.partition("=") for item in info.split("|"))
+    features = [name.split(":")[-1].strip() for name, _, value in items if value.strip() == "1"]
+    return " ".join(features) or "unknown"
 
 
 @GENERATORS.register("llamacpp")
