@@ -12,20 +12,22 @@
 #   a1/default          the Unitree A1 (MENAGERIE_ROOT: a Menagerie tree with unitree_a1)
 #   a1/cma              GFO CMA-ES on the A1
 # Each run is a one-job sweep into its own directory, so running this again keeps what finished
-# and resumes the rest (a resumed run's time limit is the whole run's).
+# and resumes the rest (a resumed run's time limit is the whole run's). RUN_SECONDS sets another
+# length (the goal is within an hour: RUN_SECONDS=3600 into another OUT).
 #
-#   scripts/locomotion_experiment.sh OUT [SEED [TASK/VARIANT ...]]   all eight variants unless named
+#   [RUN_SECONDS=3600] scripts/locomotion_experiment.sh OUT [SEED [TASK/VARIANT ...]]   all eight variants unless named
 #   python scripts/mixed_summary.py OUT        the table (its comparison is with a `mutate` variant, if any)
 set -u
 out=$(mkdir -p "$1" && cd "$1" && pwd)
 seed=${2:-0}
+seconds=${RUN_SECONDS:-1800}
 shift $(($# < 2 ? $# : 2))
 wanted=" $* "
 cd "$out"
 run() {  # task variant overrides...
   local task=$1 variant=$2; shift 2
   [ "$wanted" = "  " ] || [[ "$wanted" == *" $task/$variant "* ]] || return 0
-  colmo -m "task=$task" "seed=$seed" llm=mutate search.max_seconds=1800 search.max_samples=1000000 search.progress=false \
+  colmo -m "task=$task" "seed=$seed" llm=mutate "search.max_seconds=$seconds" search.max_samples=1000000 search.progress=false \
     "hydra.sweep.dir=$task/$variant/s$seed" "$@" || echo "run $task $variant s$seed exited $?"
 }
 run cheetah default
