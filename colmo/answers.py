@@ -18,7 +18,7 @@ from typing import Callable, Optional, Sequence, Union
 from colmo.database import identity
 from colmo.generate import Generation
 from colmo.intake import Unusable, read_program
-from colmo.program import ParametricProgram
+from colmo.program import ParametricProgram, structure_key
 from colmo.prompt import Prompt, copied_feedback, unusable_feedback
 from colmo.sandbox.check import ForbiddenProgram
 
@@ -49,6 +49,10 @@ class AnswerReader:
     def identified(self, program: ParametricProgram) -> ParametricProgram:
         """With GFO, programs that differ only in constants are one; with gfo=none, each set of constants is a program."""
         return identity(program, by_structure=self.by_structure)
+
+    def key(self, skeleton: str, values: Sequence[float]) -> str:
+        """The key of a stored program (its skeleton and constants), as `identified` gives it."""
+        return self.identified(ParametricProgram(skeleton, tuple(values), structure_key(skeleton))).key
 
     def read(self, generation: Generation) -> Reading:
         """The program of an answer, or why none could be read (a chat answer may call what its

@@ -62,6 +62,9 @@ from colmo.astutil import (
 from colmo.canonical import canonical_form
 
 PARAMS_NAME = "params"
+# The definition of `structure_key`, recorded in a run's store: a store of another version has its
+# keys computed again when it is resumed, else the structures it holds would be met as new ones.
+STRUCTURE_KEY_VERSION = 2  # 2: the canonical form (constants that add no freedom are one)
 DISPLAY_DIGITS = 4  # significant digits of the constants in the code a person reads
 
 # Callees whose integer arguments are shapes, counts, indices or digits (matched by last name).

@@ -56,7 +56,7 @@ from colmo.generate import Generation, Generator
 from colmo.heldout import training_evaluator
 from colmo.optimize.methods import tunes_constants
 from colmo.outcomes import SampleOutcomes
-from colmo.program import parametrize
+from colmo.program import STRUCTURE_KEY_VERSION, parametrize
 from colmo.record import (
     EVALUATED,
     FINISHED,
@@ -123,6 +123,10 @@ class Search:
         self.generation_seconds = 0.0
         self.stop_reason = ""
         self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=tunes_constants(cfg.gfo))
+        if self.store.key_version() != STRUCTURE_KEY_VERSION:  # a new store, or one an older colmo wrote
+            rekeyed = self.store.rekey(lambda record: self.reader.key(record.skeleton, record.initial_params or ()), STRUCTURE_KEY_VERSION)
+            if rekeyed:
+                log.info("%s: the keys of %d samples computed again (its structure keys were of an older colmo)", self.store.path, rekeyed)
         self.sampler = Sampler(cfg, self.spec, self.reader, generator)
         self.stopping = threading.Event()  # programs in flight stop tuning at their next candidate
         self.outcomes = SampleOutcomes(
@@ -145,10 +149,11 @@ class Search:
                 if not self.sampler.needs_evaluator():  # a generator that cannot start ends the run before any work
                     self.sampler.start(None)
                 self.evaluator = self.outcomes.evaluator = training_evaluator(self.spec, self.cfg.task, self.cfg.executor, self.executor, self.cfg.seed)
-                self.database = ProgramDatabase(self.cfg.database, self._starter(), self.cfg.seed)
+                starter = self._starter()
+                self.database = ProgramDatabase(self.cfg.database, starter, self.cfg.seed)
                 self.budget.plan(self.cfg, self.evaluator.calibration, self.program_seconds, self.executor)
                 self.best_so_far = [(0, self.database.best.score)]
-                to_evaluate = self._replay()
+                to_evaluate = self._replay(starter.key)
                 self.sampler.start(self.evaluator)
                 self.budget.search_starts()
                 self._loop(to_evaluate)
@@ -210,10 +215,10 @@ class Search:
         self.program_seconds = starter.evaluation_seconds if starter.n_params or not tunes_constants(self.cfg.gfo) else 0.0
         return StoredProgram(starter.key, starter.code, starter.score, 0, STARTER_SAMPLE, starter.nodes)
 
-    def _replay(self) -> list[SampleRecord]:
+    def _replay(self, starter_key: str) -> list[SampleRecord]:
         """Rebuild the database and counters from the store of an earlier run; the samples it
         left pending or interrupted, to evaluate first."""
-        batch, to_evaluate = None, []
+        batch, to_evaluate, registered = None, [], {starter_key}
         for record in self.store.records():
             if record.sample == STARTER_SAMPLE:
                 continue
@@ -222,8 +227,12 @@ class Search:
             batch = record.batch
             if record.status in TO_EVALUATE_AGAIN:
                 to_evaluate.append(record)
+            elif record.status == EVALUATED and record.key in registered:
+                self.counters.count(record)  # one structure under today's keys, evaluated twice by an older colmo: the first stays
             else:
                 self._apply(record)
+            if record.status == EVALUATED:
+                registered.add(record.key)
             self.next_sample, self.next_batch = record.sample + 1, record.batch + 1
         if batch is not None:
             self.database.on_sample(self.counters.samples)

@@ -27,7 +27,7 @@ import sqlite3
 import threading
 from dataclasses import asdict, fields
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterator, Mapping, Optional
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping, Optional
 
 from colmo.coverage import annotate, counts_of
 from colmo.errors import ConfigError, RunError
@@ -47,8 +47,10 @@ LOCK_FILE = ".colmo.lock"
 
 _SQL_TYPES = {"int": "INTEGER", "float": "REAL", "str": "TEXT", "bool": "INTEGER"}
 _JSON_FIELDS = ("parent_keys", "initial_params", "params", "returns", "coverage")
-# The run table holds the run's settings, and under this name the time the run has taken (`Elapsed`).
+# The run table holds the run's settings, and under these names the time the run has taken
+# (`Elapsed`) and the version of the structure keys in its rows (`colmo.program.STRUCTURE_KEY_VERSION`).
 _ELAPSED = "elapsed"
+_KEY_VERSION = "structure_key_version"
 
 
 def _column(name: str, annotation: str) -> str:
@@ -122,6 +124,20 @@ class ProgramStore:
     def set_elapsed(self, elapsed: Elapsed) -> None:
         """Record the time the run has taken so far, for a resumed run to add to."""
         self.set_meta({_ELAPSED: asdict(elapsed)})
+
+    def key_version(self) -> Optional[int]:
+        """The version of the structure keys in the rows; None for a store older than the record."""
+        row = self.connection.execute("SELECT value FROM run WHERE name = ?", (_KEY_VERSION,)).fetchone()
+        return json.loads(row[0]) if row else None
+
+    def rekey(self, key_of: Callable[[SampleRecord], str], version: int) -> int:
+        """Give every row that holds a program (its skeleton) the key `key_of` computes, and record
+        that the keys are of `version`; all or none. Returns how many rows' keys changed."""
+        changed = [(key, record.sample) for record in self.records() if record.skeleton is not None and (key := key_of(record)) != record.key]
+        with self._writing():
+            self.connection.executemany("UPDATE samples SET key = ? WHERE sample = ?", changed)
+            self.connection.execute("INSERT OR REPLACE INTO run(name, value) VALUES (?, ?)", (_KEY_VERSION, json.dumps(version)))
+        return len(changed)
 
     def add(self, *records: SampleRecord) -> None:
         """Store samples, all or none; a sample's pending or interrupted row is replaced by its
@@ -295,7 +311,7 @@ def _elapsed_in(connection: sqlite3.Connection) -> Optional[Elapsed]:
 
 
 def _run_settings_in(connection: sqlite3.Connection) -> dict[str, Any]:
-    return {name: json.loads(value) for name, value in connection.execute("SELECT name, value FROM run WHERE name != ?", (_ELAPSED,))}
+    return {name: json.loads(value) for name, value in connection.execute("SELECT name, value FROM run WHERE name NOT IN (?, ?)", (_ELAPSED, _KEY_VERSION))}
 
 
 def read_summary(run_dir: Path) -> Optional[dict[str, Any]]:

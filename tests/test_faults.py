@@ -25,6 +25,7 @@ import pytest
 from conftest import compose, refused, run_colmo, start_colmo, wait_for
 
 from colmo.__main__ import main as colmo
+from colmo.program import STRUCTURE_KEY_VERSION, structure_key
 from colmo.record import Summary
 from colmo.search import Search
 
@@ -235,3 +236,30 @@ def test_a_run_directory_that_cannot_be_written_is_one_line(tmp_path, monkeypatc
     monkeypatch.chdir(tmp_path)
     code, line = refused(colmo, *TINY, f"hydra.run.dir={blocker}/run")
     assert code == 2 and line.startswith(f"colmo: error: cannot create the output directory {blocker}/run: {blocker} is not a directory")
+
+
+def test_a_store_an_older_colmo_wrote_is_resumed_under_todays_structure_keys(tmp_path, caplog):
+    """A store whose keys are of another definition (an older colmo's, recorded without a key
+    version) has them computed again when resumed, so that its structures are not met as new ones,
+    and programs that are one structure under today's keys (here: two samples that share their
+    code, and one that is the starter's) are registered once, without failing the resume."""
+    overrides = ("search.max_samples=8", "gfo.budget=4", *TINY)
+    run_dir = tmp_path / "run"
+    Search(compose("search", *overrides), run_dir).run()
+    with sqlite3.connect(run_dir / "programs.db") as connection:
+        evaluated = connection.execute("SELECT sample, skeleton, initial_params, island FROM samples WHERE status = 'evaluated' ORDER BY sample").fetchall()
+        starter, first, second, third = evaluated[:4]
+        connection.execute("UPDATE samples SET key = 'old-' || sample WHERE skeleton IS NOT NULL")
+        connection.execute("UPDATE samples SET skeleton = ?, initial_params = ?, island = ? WHERE sample = ?", (*first[1:], second[0]))
+        connection.execute("UPDATE samples SET skeleton = ?, initial_params = ? WHERE sample = ?", (*starter[1:3], third[0]))
+        connection.execute("DELETE FROM run WHERE name = 'structure_key_version'")
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        assert resume(run_dir, *overrides[1:], "search.max_samples=10").samples == 10
+    assert any("the keys of" in message and "computed again" in message for message in caplog.messages)
+    with sqlite3.connect(run_dir / "programs.db") as connection:
+        keys = dict(connection.execute("SELECT sample, key FROM samples WHERE skeleton IS NOT NULL").fetchall())
+        skeletons = dict(connection.execute("SELECT sample, skeleton FROM samples WHERE skeleton IS NOT NULL").fetchall())
+        (version,) = connection.execute("SELECT value FROM run WHERE name = 'structure_key_version'").fetchone()
+    assert json.loads(version) == STRUCTURE_KEY_VERSION
+    assert all(keys[sample] == structure_key(skeleton) for sample, skeleton in skeletons.items())
+    assert keys[second[0]] == keys[first[0]] and keys[third[0]] == keys[starter[0]]
