@@ -11,16 +11,10 @@ rendered (`colmo.render`) on its first held-out episode, into the run directory;
 optional, and none can fail the search: a missing OpenGL or a simplification that finds
 nothing to remove is a line in the log and in the summary.
 
-With `search.max_seconds`, the whole run (from its job's start: `colmo.timelimit.job_start`) must end by the limit,
-this work included: `plan_finish` estimates what each step costs from what the referee costs
-(`RefereeCost`: per episode, and per lockstep batch of episodes, measured on the starter and the
-search's programs) and, where the full work does not fit in the time it is given,
-makes each step cheaper (fewer held-out episodes and programs, a shorter simplification, a
-smaller video: down to 15 frames a second, then only the episode's first seconds, never a slide
-show); the search stops early enough to leave that time.
-At the end, `finish` plans again with the time actually left, and each step ends by its slot;
-the summary says where the work was cut (`episodes` of each held-out score, the video's `size`
-and `note`).
+With `search.max_seconds`, the whole run must end by the limit, this work included: at the end,
+`finish` plans its steps with the time actually left (`colmo.finish_plan`), and each step ends by
+its slot; the summary says where the work was cut (`episodes` of each held-out score, the
+video's `size` and `note`).
 """
 
 from __future__ import annotations
@@ -39,11 +33,11 @@ from colmo.config import SearchConfig
 from colmo.coverage import Pruned
 from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor
+from colmo.finish_plan import RENDER_FIXED_S, VIDEO_MIN_S, FinishPlan, RefereeCost, plan_finish
 from colmo.heldout import alike, branch_counts, heldout_evaluator, heldout_score, robustness_of
 from colmo.names import misnamed
 from colmo.record import EVALUATED, SampleRecord, Summary, Totals
-from colmo.robustness import grid_points, save
-from colmo.sandbox.referee import LOCKSTEP
+from colmo.robustness import save
 from colmo.shell import shell_override
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, ProgramStore
 
@@ -52,112 +46,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("colmo.search")
 
-SAFETY = 1.5  # a loaded machine runs the finish this much slower than the calibration measured
-FINISH_SHARE = 0.4  # of a time limit, at most, for the finish when the full work does not fit
-# The plot and ffmpeg's start (matplotlib's import and the GL probe are warmed up in a thread
-# during the held-out scores), beside the video's frames.
-_RENDER_FIXED_S = 5.0
-_VIDEO_S = 20.0  # seconds of frames for a full-size video at its full frame rate, at most
-_VIDEO_MIN_S = 2.0  # seconds of frames for a small, short video
-_SMALL = (320, 240)
-
-
-@dataclass(frozen=True)
-class RefereeCost:
-    """What the referee's evaluations cost a worker: each episode's simulator and policy
-    (`episode`), and each lockstep batch of up to `LOCKSTEP` episodes its round trips, one per
-    control step shared by the batch (`batch`). A 100-episode held-out score costs far less than
-    ten 10-episode ones: on the pendulum it took a fifth of what their per-episode cost said."""
-
-    episode: float
-    batch: float
-
-    @classmethod
-    def of(cls, fast_seconds: float, referee_seconds: float, episodes: int) -> "RefereeCost":
-        """From a fast-path and a referee evaluation of one program on the same `episodes` (one
-        lockstep batch): the fast path's time is the episodes' own, the referee's excess the batch's."""
-        return cls(fast_seconds / max(episodes, 1), max(referee_seconds - fast_seconds, 0.0))
-
-    def scaled(self, factor: float) -> "RefereeCost":
-        return RefereeCost(self.episode * factor, self.batch * factor)
-
-    def seconds(self, episodes: int, workers: int) -> float:
-        """`episodes` spread over `workers`, each worker's share in lockstep batches, with `SAFETY`."""
-        share = math.ceil(episodes / max(workers, 1))
-        return SAFETY * max(share * self.episode + math.ceil(share / LOCKSTEP) * self.batch, 0.01)
-
-
-@dataclass(frozen=True)
-class FinishPlan:
-    """What the end of a run will do, and the seconds each step is given."""
-
-    top: int  # programs that get a held-out score
-    heldout_episodes: int
-    heldout_seconds: float
-    simplify_seconds: float
-    render_seconds: float
-    video_seconds: float
-    size: tuple[int, int]  # of the video
-    reduced: bool  # cheaper than configured, to fit the time limit
-    robustness_seconds: float = 0.0  # the best program's robustness report; 0: none
-
-    @property
-    def seconds(self) -> float:
-        return self.heldout_seconds + self.robustness_seconds + self.simplify_seconds + self.render_seconds
-
-    def describe(self, cfg: SearchConfig) -> str:
-        parts = [f"held-out scores of {self.top} program(s) over {self.heldout_episodes} episodes"]
-        if cfg.finish.robustness:
-            parts.append("robustness report" if self.robustness_seconds else "no robustness report")
-        if cfg.finish.simplify:
-            parts.append(f"simplification {self.simplify_seconds:.0f} s")
-        if cfg.finish.render:
-            parts.append(f"video {self.size[0]}x{self.size[1]}")
-        return ", ".join(parts) + (" (reduced to fit search.max_seconds)" if self.reduced else "")
-
-
-def plan_finish(cfg: SearchConfig, referee: RefereeCost, workers: int, available: float = math.inf) -> FinishPlan:
-    """The finish as configured if it fits in `available` seconds, else each step cheaper, in
-    equal shares of it. `referee`: what its evaluations cost (measured on the search's programs)."""
-    episode = referee.seconds(1, 1)  # one episode alone: the render's
-    episodes, top, workers = cfg.heldout.episodes, cfg.finish.top, max(workers, 1)
-
-    def heldout_cost(programs: int, n: int) -> float:
-        return programs * referee.seconds(n, workers)
-
-    # The simplifier measures the best program twice on both episode sets, then a few rounds; a
-    # long run keeps a share of its time for it (a winner of 65 constants needs a minute of rounds).
-    share = min(cfg.finish.simplify_share * cfg.search.max_seconds, cfg.simplify.max_seconds or math.inf)
-    simplify = max(6 * (heldout_cost(1, episodes) + heldout_cost(1, cfg.task.episodes)), share) if cfg.finish.simplify else 0.0
-    render = episode + _RENDER_FIXED_S + _VIDEO_S if cfg.finish.render else 0.0
-    grid = grid_points(cfg.finish.robustness_magnitudes, cfg.finish.robustness_delays)
-    robustness = heldout_cost(grid, cfg.finish.robustness_episodes) if cfg.finish.robustness else 0.0
-    full = FinishPlan(top, episodes, heldout_cost(top, episodes), simplify, render, _VIDEO_S, (640, 480), False, robustness)
-    if full.seconds <= available:
-        return full
-    # The robustness report, already on few episodes, is whole or skipped: it keeps its cost if that fits in an equal share.
-    if robustness > available / (1 + cfg.finish.simplify + cfg.finish.render + cfg.finish.robustness):
-        robustness = 0.0
-    available -= robustness
-    # The render first gets what it cannot do without (the episode, the plot, a few frames).
-    render = max(episode + _RENDER_FIXED_S + _VIDEO_MIN_S, available / (1 + cfg.finish.simplify + cfg.finish.render)) if cfg.finish.render else 0.0
-    left = max(available - render, 0.0)
-    # Simplifying measures the best program on the training and the held-out episodes, then scores
-    # its candidates the same way: at least three such measurements, or it cannot start. So the
-    # held-out episodes are as many as leave it that; further programs' held-out scores and a
-    # longer simplification share what remains.
-    measurements = 3 if cfg.finish.simplify else 0
-    training = heldout_cost(1, cfg.task.episodes)
-    budget = max(left - measurements * training, 0.0) / (1 + measurements)  # for one held-out score
-    held_out = next((n for n in range(episodes, workers, -workers) if heldout_cost(1, n) <= budget), min(workers, episodes))
-    one = heldout_cost(1, held_out)  # a program's held-out score
-    spare = left - one - measurements * (one + training)
-    kept = min(top, 1 + max(int(spare / (1 + cfg.finish.simplify) // one), 0))
-    video = max(render - episode - _RENDER_FIXED_S, _VIDEO_MIN_S)
-    return FinishPlan(
-        kept, held_out, kept * one,
-        max(left - kept * one, 0.0) if cfg.finish.simplify else 0.0, render, video, (640, 480) if video >= _VIDEO_S else _SMALL, True, robustness,
-    )
+_UNMEASURED = RefereeCost(0.0, 0.0)  # without a time limit, what the referee costs plans nothing
 
 
 @dataclass
@@ -204,7 +93,7 @@ def _left(until: float) -> float:
 
 def finish(
     cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator: Evaluator, run_dir: Path,
-    until: float = math.inf, referee: RefereeCost = RefereeCost(0.0, 0.0), observation_names: Sequence[str] = (), observation_bounds: Bounds = (),
+    until: float = math.inf, referee: RefereeCost = _UNMEASURED, observation_names: Sequence[str] = (), observation_bounds: Bounds = (),
 ) -> BestPrograms:
     """Held-out scores of the top programs (stored with them), then the best one simplified and
     rendered, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`;
@@ -351,14 +240,14 @@ def _shown(score: Optional[float]) -> str:
 def _render(cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float, plan: FinishPlan) -> dict:
     """The video and plot of the best policy, its frames in the time left; the summary's `media`."""
     left = _left(until)
-    trace_seconds = plan.render_seconds - plan.video_seconds - _RENDER_FIXED_S  # the episode the referee records
-    if left < _RENDER_FIXED_S + trace_seconds + _VIDEO_MIN_S:
+    trace_seconds = plan.render_seconds - plan.video_seconds - RENDER_FIXED_S  # the episode the referee records
+    if left < RENDER_FIXED_S + trace_seconds + VIDEO_MIN_S:
         log.warning("no time left for the video and plot of the best policy (search.max_seconds)")
         return {}
     from colmo.render import render_policy  # matplotlib and the renderer: only when asked for
 
     width, height = plan.size
-    video_seconds = None if math.isinf(until) else max(min(plan.video_seconds, left - _RENDER_FIXED_S - trace_seconds), _VIDEO_MIN_S)
+    video_seconds = None if math.isinf(until) else max(min(plan.video_seconds, left - RENDER_FIXED_S - trace_seconds), VIDEO_MIN_S)
     title = f"{cfg.task.name}: best policy (sample {record.sample}, training score {record.score:.1f})"
     media = render_policy(executor, heldout, record.skeleton, record.params, run_dir, title, width=width, height=height, video_seconds=video_seconds)
     found = {name: str(path.relative_to(run_dir)) for name, path in (("plot", media.plot), ("video", media.video)) if path}

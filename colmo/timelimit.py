@@ -2,7 +2,7 @@
 single run's process, imports and Hydra included; each job of a `-m` sweep from its own start,
 whichever launcher runs it: `job_start`), less what a resumed run's earlier processes took; the search's own deadline, early enough to leave the programs in
 flight their final scores and the finish its held-out scores, simplification and video
-(`colmo.finish.plan_finish`, from the starter's calibration); and the run's estimated
+(`colmo.finish_plan.plan_finish`, from the starter's calibration); and the run's estimated
 duration, said in one line before the first batch with the limit that binds, from the starter's
 tuning, then again once samples settle, from the time they took (`follow_samples`: generation,
 tuning and waiting included), and whenever that estimate moves by more than 30%.
@@ -38,7 +38,7 @@ from typing import Callable, Optional, Sequence
 
 from colmo.config import LanguageModelConfig, SearchConfig
 from colmo.evaluation import Executor
-from colmo.finish import FINISH_SHARE, SAFETY, FinishPlan, RefereeCost, plan_finish
+from colmo.finish_plan import FINISH_SHARE, SAFETY, FinishPlan, RefereeCost, plan_finish
 from colmo.optimize.tune import ProgramResult
 from colmo.record import Totals
 

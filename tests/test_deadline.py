@@ -20,7 +20,7 @@ from types import SimpleNamespace
 import pytest
 from conftest import compose, run_colmo
 
-from colmo.finish import SAFETY, RefereeCost, plan_finish
+from colmo.finish_plan import SAFETY, RefereeCost, plan_finish
 from colmo.render import PLOT_FILE, VIDEO_FILE
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, STORE_FILE, SUMMARY_FILE
 from colmo.timelimit import TimeBudget, duration, job_start, process_seconds

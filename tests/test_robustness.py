@@ -13,7 +13,7 @@ from mlflow import MlflowClient
 from colmo.config import FinishConfig, PerturbConfig
 from colmo.environments.perturb import PerturbedEnvironment, with_perturbation
 from colmo.errors import ConfigError
-from colmo.finish import RefereeCost, plan_finish
+from colmo.finish_plan import RefereeCost, plan_finish
 from colmo.help import help_text
 from colmo.rollout import episode_seeds, evaluate_policy
 from colmo.specs import load_spec
