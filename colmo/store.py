@@ -106,9 +106,7 @@ class ProgramStore:
 
     def set_meta(self, values: Mapping[str, Any]) -> None:
         with self._writing():
-            self.connection.executemany(
-                "INSERT OR REPLACE INTO run(name, value) VALUES (?, ?)", [(name, json.dumps(value)) for name, value in values.items()]
-            )
+            _put_run_values(self.connection, values)
 
     def set_heldout(self, sample: int, score: Optional[float]) -> None:
         with self._writing():
@@ -127,8 +125,7 @@ class ProgramStore:
 
     def key_version(self) -> Optional[int]:
         """The version of the structure keys in the rows; None for a store older than the record."""
-        row = self.connection.execute("SELECT value FROM run WHERE name = ?", (_KEY_VERSION,)).fetchone()
-        return json.loads(row[0]) if row else None
+        return _run_value(self.connection, _KEY_VERSION)
 
     def rekey(self, key_of: Callable[[SampleRecord], str], version: int) -> int:
         """Give every row that holds a program (its skeleton) the key `key_of` computes, and record
@@ -136,7 +133,7 @@ class ProgramStore:
         changed = [(key, record.sample) for record in self.records() if record.skeleton is not None and (key := key_of(record)) != record.key]
         with self._writing():
             self.connection.executemany("UPDATE samples SET key = ? WHERE sample = ?", changed)
-            self.connection.execute("INSERT OR REPLACE INTO run(name, value) VALUES (?, ?)", (_KEY_VERSION, json.dumps(version)))
+            _put_run_values(self.connection, {_KEY_VERSION: version})
         return len(changed)
 
     def add(self, *records: SampleRecord) -> None:
@@ -305,9 +302,19 @@ def recorded_elapsed(path: Path) -> Optional[Elapsed]:
         connection.close()
 
 
+def _run_value(connection: sqlite3.Connection, name: str) -> Any:
+    """The run table's value under `name`; None where it has none."""
+    row = connection.execute("SELECT value FROM run WHERE name = ?", (name,)).fetchone()
+    return json.loads(row[0]) if row else None
+
+
+def _put_run_values(connection: sqlite3.Connection, values: Mapping[str, Any]) -> None:
+    connection.executemany("INSERT OR REPLACE INTO run(name, value) VALUES (?, ?)", [(name, json.dumps(value)) for name, value in values.items()])
+
+
 def _elapsed_in(connection: sqlite3.Connection) -> Optional[Elapsed]:
-    row = connection.execute("SELECT value FROM run WHERE name = ?", (_ELAPSED,)).fetchone()
-    return Elapsed(**json.loads(row[0])) if row else None
+    recorded = _run_value(connection, _ELAPSED)
+    return Elapsed(**recorded) if recorded is not None else None
 
 
 def _run_settings_in(connection: sqlite3.Connection) -> dict[str, Any]:
