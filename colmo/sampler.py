@@ -37,6 +37,7 @@ class Sampler:
 
     def __init__(self, cfg: SearchConfig, spec: Spec, reader: AnswerReader, generator: Optional[Generator] = None):
         self.cfg, self.spec, self.reader = cfg, spec, reader
+        self.task_text = spec.prompt_text_for(cfg.task.env)  # what heads every prompt
         self.generator = generator
         self.filler: Optional[Generator] = None
         self.probe: Optional[ProgramProbe] = None  # what mutation asks whether a child runs
@@ -64,8 +65,9 @@ class Sampler:
 
     def prompt(self, database: ProgramDatabase, retry: int = 0) -> Prompt:
         """A prompt from a new selection of `database`; `retry`: the regeneration of an answer it is for."""
-        spec = self.spec
-        prompt = build_prompt(spec.prompt_text, database.select(), constants_tuned=tunes_constants(self.cfg.gfo), allowed_imports=spec.allowed_imports)
+        prompt = build_prompt(
+            self.task_text, database.select(), constants_tuned=tunes_constants(self.cfg.gfo), allowed_imports=self.spec.allowed_imports,
+        )
         return dataclasses.replace(prompt, retry=retry)
 
     def answers(

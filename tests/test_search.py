@@ -229,6 +229,13 @@ def test_a_duplicate_answer_is_generated_again_and_every_model_call_counts(tmp_p
     assert all("constants" in prompt.text and "tuned" in prompt.text for prompt in generator.prompts)  # gfo=oneplusone
 
 
+def test_a_search_with_longer_episodes_tells_the_model_their_length(tmp_path):
+    _, rows, generator = scripted_search(tmp_path, [STARTER_WITH.format("-np.sign(obs[2])")], "+task.env.horizon=200")
+    assert [row[0] for row in rows] == ["evaluated"]
+    [prompt] = generator.prompts
+    assert "Episodes in this search last 200 control steps (4 s); the task's default is 1000." in prompt.text
+
+
 def test_duplicate_retries_are_bounded_then_the_duplicate_is_recorded(tmp_path):
     answers = [STARTER_WITH.format(0.0)] * 2 + [STARTER_WITH.format("-np.sign(obs[2])")]
     summary, rows, generator = scripted_search(tmp_path, answers, "search.duplicate_retries=1")

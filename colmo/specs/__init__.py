@@ -20,7 +20,7 @@ import importlib.util
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Optional
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Optional
 
 from colmo import astutil
 from colmo.names import observation_in_code
@@ -53,6 +53,22 @@ class Spec:
         if not self.observation_names:
             return self.description
         return f"{self.description}\n\nThe observation, in code: `{observation_in_code(self.observation_names)}`."
+
+    def prompt_text_for(self, env_options: Mapping[str, Any]) -> str:
+        """`prompt_text` for the task as configured: where `env_options` (the task's `env:`) give
+        the episodes another length than the default environment's, the length the description
+        states, a line says this search's, so that a model is not told the wrong one."""
+        if "horizon" not in env_options:
+            return self.prompt_text
+        default, configured = self.make_environment().horizon, self.make_environment(**env_options)
+        if configured.horizon == default:
+            return self.prompt_text
+        period = getattr(configured, "control_timestep", None)
+        seconds = f" ({configured.horizon * period:g} s)" if period else ""
+        return (
+            f"{self.prompt_text}\n\nEpisodes in this search last {configured.horizon} control steps{seconds}; "
+            f"the task's default is {default}."
+        )
 
 
 def resolve_spec_path(name_or_path: str) -> Path:
