@@ -91,7 +91,8 @@ def main(cfg: SearchConfig) -> Optional[float]:
     print(
         f"{best} after {summary.samples} samples "
         f"({summary.programs_evaluated} evaluated, {summary.duplicates_skipped} duplicates, "
-        f"{summary.failures} failures, {summary.unusable_outputs} unusable) in {summary.seconds:.0f} s; stopped: {summary.stop_reason}"
+        f"{summary.failures} failures, {summary.unusable_outputs} unusable) in {summary.seconds:.0f} s "
+        f"(load {summary.load:.1f} on {summary.cpus} CPUs); stopped: {summary.stop_reason}"
     )
     print(f"run directory: {summary.run_dir}")
     if summary.resumable and sweep_job:

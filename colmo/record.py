@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import collections
 import math
+import os
 import time
 from dataclasses import asdict, astuple, dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Mapping, Optional, Protocol
@@ -149,6 +150,9 @@ class Totals:
     evaluator_busy: float
     seconds: float
     worker_seconds: float  # the evaluation workers' busy seconds, summed over workers: the compute evaluations took
+    # The machine's mean 1-minute load average over the run, its own processes included
+    # (`colmo.timelimit.LoadMeter`): what a timed result was measured under; 0 where unknown.
+    load: float
 
 
 @dataclass(frozen=True)
@@ -197,6 +201,7 @@ class Summary(Totals):
     # Per generator (`mutate`, `llamacpp`, ...: `Counters.by_generator`): model calls, programs
     # evaluated and the best training score.
     by_generator: dict = field(default_factory=dict)
+    cpus: int = field(default_factory=lambda: os.cpu_count() or 0)  # the machine's, beside `load`
 
     @property
     def failure(self) -> Optional[str]:
@@ -235,14 +240,15 @@ def summary_failure(summary: Optional[Mapping[str, Any]]) -> Optional[str]:
 
 @dataclass(frozen=True)
 class Elapsed:
-    """The time a run has taken: wall-clock seconds, the generator's busy seconds and the
-    evaluation workers' busy seconds (summed over workers). A resumed run adds its process's time
+    """The time a run has taken: wall-clock seconds, the generator's busy seconds, the evaluation
+    workers' busy seconds (summed over workers) and the machine's load over them. A resumed run adds its process's time
     to what the store says the earlier processes took, so its summary, batch reports and
     per-second plots count the whole run."""
 
     seconds: float = 0.0
     generator_seconds: float = 0.0
     evaluator_seconds: float = 0.0
+    load_seconds: float = 0.0  # the machine's load average integrated over `seconds` (`colmo.timelimit.LoadMeter`)
 
     def plus(self, other: Elapsed) -> Elapsed:
         return Elapsed(*(mine + theirs for mine, theirs in zip(astuple(self), astuple(other))))
@@ -293,7 +299,7 @@ class Counters:
             tokens_per_second=_ratio(self.completion_tokens, self.generation_seconds),
             evaluations_per_second=_ratio(self.evaluations, elapsed.seconds), generator_busy=_ratio(elapsed.generator_seconds, elapsed.seconds),
             evaluator_busy=_ratio(elapsed.evaluator_seconds, elapsed.seconds * workers), seconds=elapsed.seconds,
-            worker_seconds=elapsed.evaluator_seconds,
+            worker_seconds=elapsed.evaluator_seconds, load=_ratio(elapsed.load_seconds, elapsed.seconds),
         )
 
 

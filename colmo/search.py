@@ -76,7 +76,7 @@ from colmo.sampler import POLL_S, Sampler
 from colmo.signals import stop_signals
 from colmo.specs import Spec, load_task_spec
 from colmo.store import StoreError, open_run, run_settings, write_outputs
-from colmo.timelimit import TimeBudget
+from colmo.timelimit import LoadMeter, TimeBudget
 
 log = logging.getLogger("colmo.search")
 
@@ -133,6 +133,7 @@ class Search:
             cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop,
             observe=lambda result: self.budget.observe(result),
         )
+        self.load = LoadMeter()
         self.budget = TimeBudget(cfg.search.max_seconds, self.outcomes.running, started=started, tuned=tunes_constants(cfg.gfo), spent=self.earlier.seconds)
         self.evaluator: Optional[Evaluator] = None
         self.database: Optional[ProgramDatabase] = None
@@ -396,7 +397,8 @@ class Search:
 
     def elapsed(self) -> Elapsed:
         """The run's time: its earlier processes' (a resumed run) and this one's."""
-        return self.earlier.plus(Elapsed(self.budget.elapsed(), self.generation_seconds, self.executor.busy_seconds))
+        seconds = self.budget.elapsed()
+        return self.earlier.plus(Elapsed(seconds, self.generation_seconds, self.executor.busy_seconds, self.load.load_seconds(seconds)))
 
     def totals(self) -> Totals:
         """What the search has done so far, as the progress display, each batch report and the summary say it."""

@@ -337,6 +337,36 @@ class TimeBudget:
         return time.monotonic() + max(self.end - _CLOSE_S - time.perf_counter(), 0.0)
 
 
+class LoadMeter:
+    """The machine's 1-minute load average (`os.getloadavg`: the run's own processes included)
+    integrated over a run's wall-clock seconds, read whenever the run reports its time: what a
+    timed result was measured under. On 2 cores a process beside a search takes a share of its
+    samples, so a comparison at equal wall clock says its load. 0 where the platform has no
+    load average."""
+
+    def __init__(self, read: Callable[[], float] = lambda: load_average()) -> None:
+        self._read = read
+        self._lock = threading.Lock()  # the progress display reads the run's time from its own thread
+        self._at = 0.0
+        self._load_seconds = 0.0
+
+    def load_seconds(self, seconds: float) -> float:
+        """Load-seconds up to `seconds` into the run: each reading's load average over the seconds since the reading before."""
+        with self._lock:
+            if seconds > self._at:
+                self._load_seconds += self._read() * (seconds - self._at)
+                self._at = seconds
+            return self._load_seconds
+
+
+def load_average() -> float:
+    """The machine's 1-minute load average; 0 where the platform has none."""
+    try:
+        return os.getloadavg()[0]
+    except (AttributeError, OSError):
+        return 0.0
+
+
 def duration(seconds: Optional[float]) -> str:
     """`12m05s`, `3h20m`; `?` for an unknown or endless duration."""
     if seconds is None or not math.isfinite(seconds):

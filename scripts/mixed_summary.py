@@ -4,7 +4,8 @@
 
 Per run (OUT/<task>/<variant>/s<seed>/<job>/summary.json, or without the job directory as the
 results pages keep them, e.g. docs/mixed-generation): the best training and held-out scores,
-samples, each generator's share, and the simplified winner's lines and parameters. Then per task,
+samples, each generator's share, the simplified winner's lines and parameters, and the machine's
+mean load average over the run (— for a run from before colmo recorded it). Then per task,
 each variant against mutation alone: the difference of means with its bootstrap interval
 (`colmo.comparison.difference`), training and held-out.
 """
@@ -45,6 +46,7 @@ def row(path: Path) -> dict:
         "lines": simplified.get("lines"),
         "params": simplified.get("n_params"),
         "seconds": summary["seconds"],
+        "load": "—" if summary.get("load") is None else f"{summary['load']:.1f}",
         "stop": summary["stop_reason"],
     }
 
@@ -53,13 +55,13 @@ def main(outs: list[Path]) -> None:
     paths = sorted(path for out in outs for pattern in ("*/*/s*/summary.json", "*/*/s*/*/summary.json") for path in out.glob(pattern))
     # A run stopped before its 30 minutes (Ctrl-C, a killed session) is resumed, not reported.
     rows = [r for r in map(row, paths) if r["stop"] in ("max_seconds", "max_samples")]
-    print("| task | variant | seed | best | held-out | samples | by generator | simplified lines | parameters | seconds |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| task | variant | seed | best | held-out | samples | by generator | simplified lines | parameters | seconds | load |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         heldout = "-" if r["heldout"] is None else f"{r['heldout']:.1f}"
         print(
             f"| {r['task']} | {r['variant']} | {r['seed']} | {r['best']:.1f} | {heldout} | {r['samples']} | {r['split']} "
-            f"| {r['lines']} | {r['params']} | {r['seconds']:.0f} |"
+            f"| {r['lines']} | {r['params']} | {r['seconds']:.0f} | {r['load']} |"
         )
     print()
     print("| task | variant | seeds | best, mean ± std | held-out, mean ± std |")

@@ -10,7 +10,9 @@ from pathlib import Path
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "mixed_summary.py"
 
 
-def _run(out: Path, variant: str, seed: int, best: float, heldout: float, stop: str = "max_seconds", job: str = "0_job") -> None:
+def _run(
+    out: Path, variant: str, seed: int, best: float, heldout: float, stop: str = "max_seconds", job: str = "0_job", load: float | None = 2.14,
+) -> None:
     job = out / "pendulum" / variant / f"s{seed}" / job
     job.mkdir(parents=True)
     summary = {
@@ -22,6 +24,8 @@ def _run(out: Path, variant: str, seed: int, best: float, heldout: float, stop: 
         "by_generator": {"mutate": {"samples": 10, "programs_evaluated": 9, "best_score": best}},
         "simplified": {"lines": 4, "n_params": 2},
     }
+    if load is not None:  # summaries from before colmo recorded the load have none
+        summary["load"] = load
     (job / "summary.json").write_text(json.dumps(summary))
 
 
@@ -41,8 +45,9 @@ def test_runs_of_several_directories_compare_the_results_pages_layout_too(tmp_pa
     runs, page = tmp_path / "runs", tmp_path / "docs"
     for seed, (new, mutate) in enumerate([(300.0, 220.0), (310.0, 230.0), (320.0, 210.0)]):
         _run(runs, "default", seed, new, new - 20)
-        _run(page, "mutate", seed, mutate, mutate - 40, job="")  # docs/<page>/<task>/<variant>/s<seed>/summary.json
+        _run(page, "mutate", seed, mutate, mutate - 40, job="", load=None)  # docs/<page>/<task>/<variant>/s<seed>/summary.json
     text = subprocess.run([sys.executable, str(SCRIPT), str(runs), str(page)], capture_output=True, text=True, check=True).stdout
     assert "| pendulum | mutate | 3 | 220.0 ± 10.0 | 180.0 ± 10.0 |" in text
+    assert "| 4 | 2 | 1790 | 2.1 |" in text and "| 4 | 2 | 1790 | — |" in text  # each run's load, where it was recorded
     (line,) = [line for line in text.splitlines() if line.startswith("| pendulum | default | 3 vs 3 |")]
     assert line.startswith("| pendulum | default | 3 vs 3 | +90.0, 95% interval [")

@@ -9,6 +9,7 @@ import pytest
 
 from colmo.generate import Generation, PromptForm
 from colmo.record import DUPLICATE, EVALUATED, FAILED, INTERRUPTED, PENDING, UNUSABLE, Counters, Elapsed, Sample, SampleRecord
+from colmo.timelimit import LoadMeter
 
 
 def sample(index: int, calls: int = 1) -> Sample:
@@ -59,3 +60,14 @@ def test_totals_count_model_calls_records_by_status_and_rates():
 def test_totals_before_anything_happened_are_zeros():
     totals = Counters().totals(Elapsed(), workers=2)
     assert totals.samples == 0 and totals.valid_program_rate == totals.evaluator_busy == totals.evaluations_per_second == 0.0
+
+
+def test_the_load_is_the_mean_load_average_over_the_run_resumed_processes_included():
+    readings = iter([2.0, 4.0])
+    meter = LoadMeter(read=lambda: next(readings))
+    assert meter.load_seconds(10.0) == 20.0 and meter.load_seconds(10.0) == 20.0  # no time passed: no reading
+    assert meter.load_seconds(20.0) == 60.0  # 2.0 over the first ten seconds, 4.0 over the next ten
+    this_process = Elapsed(seconds=20.0, load_seconds=60.0)
+    assert Counters().totals(this_process, workers=2).load == pytest.approx(3.0)
+    earlier = Elapsed(seconds=40.0, load_seconds=40.0)  # an earlier process of a resumed run, at load 1.0
+    assert Counters().totals(earlier.plus(this_process), workers=2).load == pytest.approx(100 / 60)

@@ -54,6 +54,9 @@ def test_small_search_end_to_end(tmp_path):
     counted = [record for record in ProgramStore(run_dir / "programs.db").records() if record.status == "evaluated" and record.sample >= 0]
     assert counted and all(record.coverage is not None and len(record.coverage) == len(coverage.sites(record.code)) for record in counted)
     assert f"best score {summary['best_score']:.2f}" in result.stdout
+    # the load it was measured under: the machine's mean load average, its own workers included
+    assert summary["cpus"] == os.cpu_count() and summary["load"] >= 0.0
+    assert f"(load {summary['load']:.1f} on {os.cpu_count()} CPUs)" in result.stdout
 
 
 def test_same_seed_same_search(tmp_path):
