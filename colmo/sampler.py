@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import dataclasses
+import functools
 import logging
 import time
 from typing import Callable, Optional
@@ -37,7 +38,6 @@ class Sampler:
 
     def __init__(self, cfg: SearchConfig, spec: Spec, reader: AnswerReader, generator: Optional[Generator] = None):
         self.cfg, self.spec, self.reader = cfg, spec, reader
-        self.task_text = spec.prompt_text_for(cfg.task.env)  # what heads every prompt
         self.generator = generator
         self.filler: Optional[Generator] = None
         self.probe: Optional[ProgramProbe] = None  # what mutation asks whether a child runs
@@ -45,6 +45,12 @@ class Sampler:
         self.calling_since: Optional[float] = None  # when the generator's call in flight began (`time.perf_counter()`)
         self.calling: Optional[Generator] = None  # the generator of that call
         self.thread = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="colmo-generate")
+
+    @functools.cached_property
+    def task_text(self) -> str:
+        """What heads every prompt; built at the first prompt, once the starter's evaluation has
+        shown that the task's environment builds with its options."""
+        return self.spec.prompt_text_for(self.cfg.task.env)
 
     def needs_evaluator(self) -> bool:
         """Whether the generator can only start once the task's evaluator exists (it probes programs)."""

@@ -171,7 +171,10 @@ def test_a_bad_value_is_one_line_exit_2_and_leaves_nothing(tmp_path):
     (["-m", "seed=0,-1"], "seed must be >= 0, got -1"),  # every value of a sweep is checked before any job runs
     (["-m", "gfo.budget=tag(int,interval(0,4))"], "gfo.budget must be >= 1, got 0"),  # the ends of a sweeper's interval too
     (["hydra.run.dir=/proc/colmo/run"], "cannot create the output directory /proc/colmo/run"),
-], ids=["sweep", "interval", "output dir"])
+    # an episode of no steps would score every program 0, and a string would fail deep in a worker
+    (["+task.env.horizon=0"], "task.env.horizon must be a whole number of control steps >= 1, got 0"),
+    (["+task.env.horizon=abc"], "task.env.horizon must be a whole number of control steps >= 1, got 'abc'"),
+], ids=["sweep", "interval", "output dir", "horizon 0", "horizon text"])
 def test_bad_values_of_sweeps_and_output_directories_are_refused_before_anything_runs(tmp_path, monkeypatch, overrides, message):
     monkeypatch.chdir(tmp_path)
     code, line = refused(colmo, *overrides)
