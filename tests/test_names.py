@@ -59,14 +59,6 @@ def test_the_prompt_states_the_observation_as_code():
     assert load_spec("quadruped.py").prompt_text == load_spec("quadruped.py").description  # it names nothing
 
 
-def test_the_prompt_states_a_configured_episode_length_beside_the_described_one():
-    spec = load_spec("a1.py")
-    assert "episodes of 1000 steps (1 s)" in spec.description
-    assert spec.prompt_text_for({}) == spec.prompt_text_for({"horizon": 1000}) == spec.prompt_text
-    assert spec.prompt_text_for({"horizon": 3000}) == (
-        spec.prompt_text + "\n\nEpisodes in this search last 3000 control steps (3 s); the task's default is 1000."
-    )
-
 
 def test_a_spec_s_observation_names_must_be_identifiers(tmp_path):
     source = (load_spec("pendulum.py").path).read_text().replace('"cos_theta",', '"cos theta",')

@@ -377,3 +377,23 @@ def test_a_shown_program_leaves_out_the_branches_it_never_took():
     assert prompt.programs[-1] == code  # the program as stored and scored
     uncounted = build_prompt(DESCRIPTION, Selection(2, [LOW, dataclasses.replace(counted, coverage=None)]))
     assert "obs[0] > 1.5" in uncounted.shown_code
+
+
+def test_the_prompt_states_a_configured_episode_length_beside_the_described_one():
+    spec = load_spec("pendulum.py")
+    assert "episodes of 1000 steps" in spec.description
+    assert spec.prompt_text_for({}) == spec.prompt_text_for({"horizon": 1000}) == spec.prompt_text
+    assert spec.prompt_text_for({"horizon": 150, "angle_bound": 0.5}) == (
+        spec.prompt_text + "\n\nEpisodes in this search last 150 control steps (3 s); the task's default is 1000."
+    )
+
+
+def test_an_environment_without_a_default_length_is_told_only_the_configured_one(tmp_path):
+    (tmp_path / "given_length.py").write_text(
+        '"""A pendulum whose episodes last as long as the task says."""\n\n'
+        "from colmo.environments.pendulum import PendulumSwingup\n\n\n"
+        "def make_environment(horizon):\n    return PendulumSwingup(horizon=horizon)\n\n\n"
+        "def policy(obs):\n    return 0.0\n"
+    )
+    spec = load_spec(str(tmp_path / "given_length.py"))
+    assert spec.prompt_text_for({"horizon": 50}) == spec.prompt_text + "\n\nEpisodes in this search last 50 control steps (1 s)."

@@ -55,20 +55,23 @@ class Spec:
         return f"{self.description}\n\nThe observation, in code: `{observation_in_code(self.observation_names)}`."
 
     def prompt_text_for(self, env_options: Mapping[str, Any]) -> str:
-        """`prompt_text` for the task as configured: where `env_options` (the task's `env:`) give
-        the episodes another length than the default environment's, the length the description
+        """`prompt_text` for the task as configured: where `env_options` (the task's `env:`) set
+        the episodes' length (`horizon`) to another than the default, the length a description
         states, a line says this search's, so that a model is not told the wrong one."""
         if "horizon" not in env_options:
             return self.prompt_text
-        default, configured = self.make_environment().horizon, self.make_environment(**env_options)
+        configured = self.make_environment(**env_options)
+        others = {name: value for name, value in env_options.items() if name != "horizon"}
+        try:
+            default = self.make_environment(**others).horizon
+        except TypeError:  # an environment that takes no default length
+            default = None
         if configured.horizon == default:
             return self.prompt_text
         period = getattr(configured, "control_timestep", None)
         seconds = f" ({configured.horizon * period:g} s)" if period else ""
-        return (
-            f"{self.prompt_text}\n\nEpisodes in this search last {configured.horizon} control steps{seconds}; "
-            f"the task's default is {default}."
-        )
+        told = "" if default is None else f"; the task's default is {default}"
+        return f"{self.prompt_text}\n\nEpisodes in this search last {configured.horizon} control steps{seconds}{told}."
 
 
 def resolve_spec_path(name_or_path: str) -> Path:
