@@ -150,7 +150,7 @@ class Totals:
     evaluator_busy: float
     seconds: float
     worker_seconds: float  # the evaluation workers' busy seconds, summed over workers: the compute evaluations took
-    # The machine's mean 1-minute load average over the run, its own processes included
+    # The machine's mean load average over the run, its own processes included
     # (`colmo.timelimit.LoadMeter`): what a timed result was measured under; 0 where unknown.
     load: float
 

@@ -63,10 +63,12 @@ def test_totals_before_anything_happened_are_zeros():
 
 
 def test_the_load_is_the_mean_load_average_over_the_run_resumed_processes_included():
-    readings = iter([2.0, 4.0])
+    readings = iter([(2.0, 9.0, 9.0), (4.0, 9.0, 9.0), (7.0, 1.5, 7.0), (7.0, 7.0, 0.5)])
     meter = LoadMeter(read=lambda: next(readings))
     assert meter.load_seconds(10.0) == 20.0 and meter.load_seconds(10.0) == 20.0  # no time passed: no reading
-    assert meter.load_seconds(20.0) == 60.0  # 2.0 over the first ten seconds, 4.0 over the next ten
+    assert meter.load_seconds(20.0) == 60.0  # the 1-minute average: 2.0 over the first ten seconds, 4.0 over the next ten
+    # readings minutes apart stand for their gap with the 5-minute average, then the 15-minute one
+    assert meter.load_seconds(320.0) == 60.0 + 1.5 * 300 and meter.load_seconds(1320.0) == 510.0 + 0.5 * 1000
     this_process = Elapsed(seconds=20.0, load_seconds=60.0)
     assert Counters().totals(this_process, workers=2).load == pytest.approx(3.0)
     earlier = Elapsed(seconds=40.0, load_seconds=40.0)  # an earlier process of a resumed run, at load 1.0
