@@ -5,7 +5,8 @@ flight their final scores and the finish its held-out scores, simplification and
 (`colmo.finish_plan.plan_finish`, from the starter's calibration); and the run's estimated
 duration, said in one line before the first batch with the limit that binds, from the starter's
 tuning, then again once samples settle, from the time they took (`follow_samples`: generation,
-tuning and waiting included), and whenever that estimate moves by more than 30%.
+tuning and waiting included), and whenever that estimate moves by more than 30%; and the
+machine's load over the run (`LoadMeter`), which every timed result states.
 
 The deadline depends on how many programs are being tuned: each one in flight at the deadline
 still ends its candidate and scores its rounded constants on the fast path and by the referee.
