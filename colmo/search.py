@@ -323,9 +323,9 @@ class Search:
         self.budget.follow_samples(report, self.resumed_samples, self.cfg.search.max_samples, (len(records), batch.entered), pipeline)
         self.store.set_elapsed(self.elapsed())  # a run killed later resumes with its time up to here
         log.info(
-            "batch %d: samples %d, programs evaluated %d, best %.2f, gen %.1f s, eval %.1f s, evals/s %.1f",
+            "batch %d: samples %d, programs evaluated %d, best %.2f, gen %.1f s, eval %.1f s, evals/s %.1f, load %.1f",
             batch.index, report.samples, report.programs_evaluated, report.best_score,
-            report.generation_seconds, report.evaluation_seconds, report.evaluations_per_second,
+            report.generation_seconds, report.evaluation_seconds, report.evaluations_per_second, report.load,
         )
         for observer in self.observers:
             observer.on_batch(report, records)
