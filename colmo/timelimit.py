@@ -344,6 +344,14 @@ class TimeBudget:
 _LOAD_GAPS_S = (150.0, 600.0)
 
 
+def load_averages() -> tuple[float, float, float]:
+    """The machine's 1-, 5- and 15-minute load averages; zeros where the platform has none."""
+    try:
+        return os.getloadavg()
+    except (AttributeError, OSError):
+        return (0.0, 0.0, 0.0)
+
+
 class LoadMeter:
     """The machine's load average (`os.getloadavg`: the run's own processes included) integrated
     over a run's wall-clock seconds, read whenever the run reports its time: what a timed result
@@ -352,7 +360,7 @@ class LoadMeter:
     one before, with the average whose window (1, 5 or 15 minutes) fits that gap: a locomotion
     search reports every few minutes. 0 where the platform has no load average."""
 
-    def __init__(self, read: Callable[[], tuple[float, float, float]] = lambda: load_averages()) -> None:
+    def __init__(self, read: Callable[[], tuple[float, float, float]] = load_averages) -> None:
         self._read = read
         self._lock = threading.Lock()  # the progress display reads the run's time from its own thread
         self._at = 0.0
@@ -366,14 +374,6 @@ class LoadMeter:
                 self._load_seconds += self._read()[bisect.bisect_left(_LOAD_GAPS_S, gap)] * gap
                 self._at = seconds
             return self._load_seconds
-
-
-def load_averages() -> tuple[float, float, float]:
-    """The machine's 1-, 5- and 15-minute load averages; zeros where the platform has none."""
-    try:
-        return os.getloadavg()
-    except (AttributeError, OSError):
-        return (0.0, 0.0, 0.0)
 
 
 def duration(seconds: Optional[float]) -> str:
