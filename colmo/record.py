@@ -151,7 +151,7 @@ class Totals:
     seconds: float
     worker_seconds: float  # the evaluation workers' busy seconds, summed over workers: the compute evaluations took
     # The machine's mean load average over the run, its own processes included
-    # (`colmo.timelimit.LoadMeter`): what a timed result was measured under; 0 where unknown.
+    # (`colmo.load.LoadMeter`): what a timed result was measured under; 0 where unknown.
     load: float
 
 
@@ -248,7 +248,7 @@ class Elapsed:
     seconds: float = 0.0
     generator_seconds: float = 0.0
     evaluator_seconds: float = 0.0
-    load_seconds: float = 0.0  # the machine's load average integrated over `seconds` (`colmo.timelimit.LoadMeter`)
+    load_seconds: float = 0.0  # the machine's load average integrated over `seconds` (`colmo.load.LoadMeter`)
 
     def plus(self, other: Elapsed) -> Elapsed:
         return Elapsed(*(mine + theirs for mine, theirs in zip(astuple(self), astuple(other))))

@@ -54,6 +54,7 @@ from colmo.executor import make_executor
 from colmo.finish import BestPrograms, finish
 from colmo.generate import Generation, Generator
 from colmo.heldout import training_evaluator
+from colmo.load import LoadMeter
 from colmo.optimize.methods import tunes_constants
 from colmo.outcomes import SampleOutcomes
 from colmo.program import STRUCTURE_KEY_VERSION, parametrize
@@ -76,7 +77,7 @@ from colmo.sampler import POLL_S, Sampler
 from colmo.signals import stop_signals
 from colmo.specs import Spec, load_task_spec
 from colmo.store import StoreError, open_run, run_settings, write_outputs
-from colmo.timelimit import LoadMeter, TimeBudget
+from colmo.timelimit import TimeBudget
 
 log = logging.getLogger("colmo.search")
 

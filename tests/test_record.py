@@ -8,8 +8,8 @@ import dataclasses
 import pytest
 
 from colmo.generate import Generation, PromptForm
+from colmo.load import LoadMeter
 from colmo.record import DUPLICATE, EVALUATED, FAILED, INTERRUPTED, PENDING, UNUSABLE, Counters, Elapsed, Sample, SampleRecord
-from colmo.timelimit import LoadMeter
 
 
 def sample(index: int, calls: int = 1) -> Sample:
