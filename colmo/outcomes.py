@@ -2,13 +2,15 @@
 check refused it, or its program is known), or its program tuned and scored in a program
 thread of its own (`optimize_program`; the executor is shared). Either way the record is
 stored before its future completes, so whatever waits on it sees it stored; a program whose
-evaluation was cancelled (a second Ctrl-C) is stored `interrupted`, for a resumed run.
+evaluation was cancelled (a second Ctrl-C) is stored `interrupted`, for a resumed run. A
+`Batch` is the outcomes of one batch in flight.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
 import threading
+from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 import numpy as np
@@ -23,6 +25,24 @@ from colmo.program import ParametricProgram
 from colmo.record import DUPLICATE, FAILED, INTERRUPTED, UNUSABLE, Sample, SampleRecord
 from colmo.sandbox.check import ForbiddenProgram
 from colmo.store import ProgramStore
+
+
+@dataclass
+class Batch:
+    """A batch in flight: its samples, each settled or evaluating in a program thread."""
+
+    index: int
+    generation_seconds: float
+    started: float
+    outcomes: list[concurrent.futures.Future] = field(default_factory=list)  # of SampleRecord
+
+    def done(self) -> bool:
+        return all(outcome.done() for outcome in self.outcomes)
+
+    @property
+    def entered(self) -> float:
+        """When it entered the pipeline: its generation's start (`time.perf_counter()`)."""
+        return self.started - self.generation_seconds
 
 
 class SampleOutcomes:

@@ -41,7 +41,6 @@ import logging
 import threading
 import time
 from collections import deque
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
@@ -56,7 +55,7 @@ from colmo.generate import Generation, Generator
 from colmo.heldout import training_evaluator
 from colmo.load import LoadMeter
 from colmo.optimize.methods import tunes_constants
-from colmo.outcomes import SampleOutcomes
+from colmo.outcomes import Batch, SampleOutcomes
 from colmo.program import STRUCTURE_KEY_VERSION, parametrize
 from colmo.record import (
     EVALUATED,
@@ -84,24 +83,6 @@ log = logging.getLogger("colmo.search")
 STARTER_SAMPLE = -1
 
 
-@dataclass
-class _Batch:
-    """A batch in flight: its samples, each settled or evaluating in a program thread."""
-
-    index: int
-    generation_seconds: float
-    started: float
-    outcomes: list[concurrent.futures.Future] = field(default_factory=list)  # of SampleRecord
-
-    def done(self) -> bool:
-        return all(outcome.done() for outcome in self.outcomes)
-
-    @property
-    def entered(self) -> float:
-        """When it entered the pipeline: its generation's start (`time.perf_counter()`)."""
-        return self.started - self.generation_seconds
-
-
 class Search:
     """One search run into `run_dir` (or the run `cfg.resume` names). `executor` and `generator` are built from the config
     unless given (a test, a notebook, a benchmark); `started`: when the run's time limit began (default: now)."""
@@ -117,7 +98,7 @@ class Search:
         self.store, self.lock = open_run(self.run_dir, run_settings(cfg), resume=bool(cfg.resume))
         self.earlier = self.store.elapsed()  # a resumed run's time so far, to add this process's to
         self.executor = executor or make_executor(cfg.executor)
-        self.in_flight: deque[_Batch] = deque()
+        self.in_flight: deque[Batch] = deque()
         self.counters = Counters()
         self.best_so_far: list[tuple[int, float]] = []
         self.next_sample = self.next_batch = self.in_flight_samples = self.resumed_samples = 0  # resumed: model calls settled earlier
@@ -248,7 +229,7 @@ class Search:
     def _samples_left(self) -> int:
         return self.cfg.search.max_samples - self.counters.samples - self.in_flight_samples
 
-    def _generate(self, generator: Generator, n: int) -> Optional[_Batch]:
+    def _generate(self, generator: Generator, n: int) -> Optional[Batch]:
         """Generate the next batch of `n` samples with `generator` and start evaluating it; None
         if the search is stopping."""
         if not n:
@@ -260,7 +241,7 @@ class Search:
             return None
         seconds = time.perf_counter() - started
         self.generation_seconds += seconds
-        batch = _Batch(self.next_batch, seconds, time.perf_counter())
+        batch = Batch(self.next_batch, seconds, time.perf_counter())
         samples = [
             Sample(self.next_sample + i, batch.index, answer.prompt.island, tuple(answer.prompt.parent_keys), answer.generation)
             for i, answer in enumerate(answers)
@@ -286,9 +267,9 @@ class Search:
         self._fill()
         return False
 
-    def _reevaluate(self, records: list[SampleRecord]) -> _Batch:
+    def _reevaluate(self, records: list[SampleRecord]) -> Batch:
         """The pending and interrupted samples of a resumed run, as a batch of their own."""
-        batch = _Batch(records[0].batch, 0.0, time.perf_counter())
+        batch = Batch(records[0].batch, 0.0, time.perf_counter())
         for sample in (record.as_sample() for record in records):
             batch.outcomes.append(self.outcomes.submit(sample, self.reader.read(sample.generation), self.database))
         self.in_flight_samples += sum(record.model_calls for record in records)
@@ -309,7 +290,7 @@ class Search:
 
     # -- integration ----------------------------------------------------------------------------
 
-    def _integrate(self, batch: _Batch) -> None:
+    def _integrate(self, batch: Batch) -> None:
         while not concurrent.futures.wait(batch.outcomes, timeout=POLL_S).not_done == set():
             self._stop_requested()  # the deadline stops the programs in flight at their next candidate
         records = [outcome.result() for outcome in batch.outcomes]  # stored; an exception here is a bug or a full disk
@@ -405,7 +386,7 @@ class Search:
         """What the search has done so far, as the progress display, each batch report and the summary say it."""
         return self.counters.totals(self.elapsed(), self.executor.n_workers)
 
-    def _report(self, batch: _Batch) -> BatchReport:
+    def _report(self, batch: Batch) -> BatchReport:
         return BatchReport(
             batch=batch.index, best_score=self.database.best.score, best_per_island=tuple(self.database.best_per_island),
             generation_seconds=batch.generation_seconds, evaluation_seconds=time.perf_counter() - batch.started,
