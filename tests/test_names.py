@@ -59,7 +59,6 @@ def test_the_prompt_states_the_observation_as_code():
     assert load_spec("quadruped.py").prompt_text == load_spec("quadruped.py").description  # it names nothing
 
 
-
 def test_a_spec_s_observation_names_must_be_identifiers(tmp_path):
     source = (load_spec("pendulum.py").path).read_text().replace('"cos_theta",', '"cos theta",')
     (tmp_path / "bad.py").write_text(source)

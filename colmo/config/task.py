@@ -80,10 +80,10 @@ class TaskConfig:
 
     def __post_init__(self) -> None:
         at_least(self, "task", episodes=1)
-        # The bundled environments' episode length: a typo here would run episodes of no steps.
-        horizon = self.env.get("horizon", 1)
-        require(
-            isinstance(horizon, int) and not isinstance(horizon, bool) and horizon >= 1,
-            f"task.env.horizon must be a whole number of control steps >= 1, got {horizon!r}",
-        )
+        if "horizon" in self.env:  # the bundled environments' episode length: 0 would run episodes of no steps
+            horizon = self.env["horizon"]
+            require(
+                isinstance(horizon, int) and not isinstance(horizon, bool) and horizon >= 1,
+                f"task.env.horizon must be a whole number of control steps >= 1, got {horizon!r}",
+            )
 
