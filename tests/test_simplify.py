@@ -376,6 +376,68 @@ def test_a_constant_factor_is_merged_into_an_array_literal_by_a_measured_candida
         assert not [c for c in deletion_candidates(code) if c.description.startswith("merged")], kept
 
 
+# The A1's seed-2 winner of docs/locomotion-search.md, shortened: mutation's blend of two related
+# programs, each assigned to its own name, alike but for their constants.
+BLEND = """import numpy as np
+
+def policy(obs):
+    action = 0.0162 * obs[21] + np.array([0.9069, 0.13, -0.3416]) * obs[3] ** 2
+    action_b = 0.0146 * obs[21] + np.array([0.8374, 0.1259, -0.3418]) * obs[3] ** 2
+    return 0.5068 * action + 0.4948 * action_b
+"""
+
+
+def _merged(code: str) -> list[str]:
+    return [c.code for c in deletion_candidates(code) if c.description.startswith("merged the terms")]
+
+
+def test_terms_alike_but_for_their_constants_are_merged_into_one_by_a_measured_candidate():
+    (merged,) = [c for c in deletion_candidates(BLEND) if c.description.startswith("merged the terms")]
+    assert merged.description == "merged the terms of `0.5068 * action + 0.4948 * action_b`, alike but for their constants, at line 6"
+    # Each constant the weighted mean of the pair, (0.5068 * 0.9069 + 0.4948 * 0.8374) / 1.0016 = 0.8726; the weights' sum in front.
+    assert merged.code.endswith("return 1.002 * (0.01541 * obs[21] + np.array([0.8726, 0.128, -0.3417]) * obs[3] ** 2)")
+    # Terms written out, a difference, one name twice: 0.3 * 1.5 - 0.1 * 2.5 = 0.2 * 1.0.
+    assert _merged("import numpy as np\n\ndef policy(obs):\n    return 0.3 * np.tanh(1.5 * obs[0]) - 0.1 * np.tanh(2.5 * obs[0])") == [
+        "import numpy as np\n\ndef policy(obs):\n    return 0.2 * np.tanh(1.0 * obs[0])"
+    ]
+    assert _merged("def policy(obs):\n    a = 2.0 * obs[0]\n    return 0.25 * a + a * 0.75") == ["def policy(obs):\n    a = 2.0 * obs[0]\n    return a"]
+    for differs in (
+        BLEND.replace("obs[3] ** 2\n    return", "obs[4] ** 2\n    return"),  # another observation
+        BLEND.replace("    return", "    action_b = action_b + 1.0\n    return"),  # a name assigned twice
+        BLEND.replace("    action = 0.0162 * obs[21]", "    obs = 2.0 * obs\n    action = 0.0162 * obs[21]"),  # read from a rebound name
+        BLEND.replace("0.5068 * action + 0.4948", "0.5 * action - 0.5"),  # weights that cancel
+        BLEND.replace("0.13, -0.3416", "0.13 * obs[0], -0.3416"),  # an expression where the other has a constant
+    ):
+        assert _merged(differs) == [], differs
+
+
+def test_a_blend_of_two_near_equal_programs_is_simplified_to_one():
+    """TRUSTED TEST CODE: the programs run in this process; a program's score is how close its
+    actions come to the blend's, so the merge, exact here, passes and every other deletion fails."""
+    observations = np.random.default_rng(0).normal(size=(64, 27))
+
+    def actions(code: str) -> np.ndarray:
+        policy = _run_policy(code)
+        return np.array([np.broadcast_to(policy(o), 3) for o in observations])  # a constant action, too
+
+    blended = actions(BLEND)
+
+    def score(code: str) -> Scores:
+        try:
+            closeness = 100.0 - 100.0 * float(np.mean(np.abs(actions(code) - blended)))
+        except Exception:  # a deletion can break a program: a name left unassigned, a list times a float
+            closeness = -math.inf
+        return Scores(closeness, closeness)
+
+    def score_batch(codes):
+        return [score(code) for code in codes]
+
+    result = simplify(BLEND, scoring(score_batch))
+    assert result.steps[0].description.startswith("merged the terms of `0.5068 * action + 0.4948 * action_b`")
+    assert result.code.endswith("return 0.01541 * obs[21] + np.array([0.8726, 0.128, -0.3417]) * obs[3] ** 2")  # and the 1.002 dropped
+    assert measure(result.code).params == 4 < measure(BLEND).params == 10
+
+
 # --- the acceptance rule, with constructed scores -------------------------------------------------
 
 SUM_OF_TERMS = "def policy(obs):\n    return 1.0 * obs[0] + 2.0 * obs[1] + 3.0 * obs[2]"

@@ -5,7 +5,10 @@ of an `if` statement or of a conditional expression, drop a term of a sum or dif
 factor of a product, a divisor or an exponent, merge two constant factors (`2.0 * (3.0 * x)`
 -> `6.0 * x`, `2.0 * (np.array([1.0, 3.0]) * x)` -> `np.array([2.0, 6.0]) * x`), unwrap a call
 to one of its arguments (`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), keep one operand of
-`and`/`or`, and replace a subexpression that no drop covers (a call argument, a compared value,
+`and`/`or`, merge two terms alike but for their constants (`0.5 * a + 0.5 * a_b`, where `a` and
+`a_b` are assigned the same expression with other constants, as mutation's blend of two related
+programs writes: one expression, each constant the weighted mean of the pair), and
+replace a subexpression that no drop covers (a call argument, a compared value,
 an assigned or returned value, a branch) by 0.0 or 1.0. The last `return` of the policy is never deleted (a policy
 returning None always fails). Each candidate is cleaned by `remove_dead_code`, so what a
 deletion leaves dead goes with it, and must be strictly smaller (`colmo.astutil.node_count`);
@@ -17,11 +20,12 @@ from __future__ import annotations
 import ast
 import copy
 import math
+from collections import Counter
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Optional
 
 from colmo import astutil
-from colmo.astutil import OPAQUE_FIELDS, is_number_literal, node_count, number_literal, strip_docstrings
+from colmo.astutil import OPAQUE_FIELDS, bindings, is_number_literal, node_count, number_literal, strip_docstrings
 from colmo.program import DISPLAY_DIGITS
 from colmo.simplify.deadcode import FUNCTIONS, own_statements, remove_dead_code
 
@@ -103,6 +107,10 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
         return edit
 
     functions = [n for n in ast.walk(tree) if isinstance(n, FUNCTIONS)]
+    definitions: dict[int, dict[str, ast.expr]] = {}  # each node's function's `_single_definitions`
+    for function in functions:  # in walk order: a nested function's nodes end with its own
+        single = _single_definitions(function)
+        definitions.update((id(n), single) for n in ast.walk(function))
     for function in functions:
         # Without its last statement, a `return`, the policy returns None: always a failure.
         final_return = function.body[-1] if function.name == function_name and isinstance(function.body[-1], ast.Return) else None
@@ -131,6 +139,11 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
                     yield node, f"dropped the {word} `{_short(dropped)}` at {where}", replace_with(lambda n, side=side: getattr(n, side))
             if _merged_factors(node) is not None:
                 yield node, f"merged the constant factors of `{_short(node)}` at {where}", replace_with(_merged_factors)
+            merged = _merged_terms(node, definitions.get(id(node), {}))
+            if merged is not None:
+                yield node, f"merged the terms of `{_short(node)}`, alike but for their constants, at {where}", replace_with(
+                    lambda n, merged=merged: copy.deepcopy(merged)
+                )
         elif isinstance(node, ast.BoolOp):
             for i, value in enumerate(node.values):
                 yield node, f"kept only `{_short(value)}` of `{_short(node, 40)}` at {where}", replace_with(lambda n, i=i: n.values[i])
@@ -169,7 +182,7 @@ def _merged_literal(value: float, node: ast.AST) -> Optional[ast.expr]:
         product = value * ast.literal_eval(node)
         if not math.isfinite(product):
             return None
-        return number_literal(float(f"{product:.{DISPLAY_DIGITS}g}") if isinstance(product, float) else product)
+        return number_literal(_displayed(product) if isinstance(product, float) else product)
     is_array = isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "array"
     if not (is_array and isinstance(node.func.value, ast.Name) and node.func.value.id in ("np", "numpy")):
         return None
@@ -199,6 +212,83 @@ def _merged_factors(node: ast.AST) -> Optional[ast.expr]:
                 if (merged := _merged_literal(value, inner)) is not None:  # the factors stay in their order
                     return ast.BinOp(merged, ast.Mult(), rest) if first else ast.BinOp(rest, ast.Mult(), merged)
     return None
+
+
+def _single_definitions(function: ast.FunctionDef | ast.AsyncFunctionDef) -> dict[str, ast.expr]:
+    """The names `function`'s body binds once, by a plain assignment among its top-level
+    statements, from names the body never binds: each such name's value wherever it is read."""
+    bound = Counter(name for statement in function.body for n in ast.walk(statement) for name in bindings(n))
+    single: dict[str, ast.expr] = {}
+    for statement in function.body:
+        if isinstance(statement, ast.Assign) and len(statement.targets) == 1 and isinstance(statement.targets[0], ast.Name):
+            reads = {n.id for n in ast.walk(statement.value) if isinstance(n, ast.Name)}
+            if bound[statement.targets[0].id] == 1 and not any(bound[name] for name in reads):
+                single[statement.targets[0].id] = statement.value
+    return single
+
+
+class _FloatConstants(ast.NodeTransformer):
+    """Replaces each float literal (a signed one is one literal) by `replace(its value)`."""
+
+    def __init__(self, replace: Callable[[float], ast.expr]):
+        self.replace = replace
+
+    def visit_UnaryOp(self, node: ast.UnaryOp) -> ast.AST:
+        if is_number_literal(node) and isinstance(node.operand.value, float):
+            return self.replace(ast.literal_eval(node))
+        return self.generic_visit(node)
+
+    def visit_Constant(self, node: ast.Constant) -> ast.AST:
+        return self.replace(node.value) if isinstance(node.value, float) else node
+
+
+def _float_constants(node: ast.expr) -> tuple[str, list[float]]:
+    """The shape of `node` (its dump with every float literal 0.0) and its float literals, in order."""
+    values: list[float] = []
+    shape = _FloatConstants(lambda value: values.append(value) or ast.Constant(0.0)).visit(copy.deepcopy(node))
+    return ast.dump(shape), values
+
+
+def _weighted(term: ast.expr) -> tuple[float, ast.expr]:
+    """`c * x` or `x * c`, c a number literal, as (c, x); any other term as (1, term)."""
+    if isinstance(term, ast.BinOp) and isinstance(term.op, ast.Mult):
+        for weight, rest in ((term.left, term.right), (term.right, term.left)):
+            if is_number_literal(weight) and not is_number_literal(rest):
+                return float(ast.literal_eval(weight)), rest
+    return 1.0, term
+
+
+def _displayed(value: float) -> float:
+    return float(f"{value:.{DISPLAY_DIGITS}g}")
+
+
+def _merged_terms(node: ast.BinOp, definitions: dict[str, ast.expr]) -> Optional[ast.expr]:
+    """`w1 * x + w2 * y` (or `-`; a term without a literal factor has weight 1) as one term,
+    when x and y are alike but for their float constants: the same expression, or names of
+    `definitions` assigned such expressions. The term is `(w1 + w2) * m`, where m is x's
+    expression with each float constant the weighted mean (w1 * a + w2 * b) / (w1 + w2) of the
+    pair; exact where the expression is linear in its constants. None where the terms differ
+    otherwise or the weights cancel."""
+    if not isinstance(node.op, (ast.Add, ast.Sub)):
+        return None
+    (w1, x), (w2, y) = _weighted(node.left), _weighted(node.right)
+    w2 = -w2 if isinstance(node.op, ast.Sub) else w2
+    total = _displayed(w1 + w2)
+    if total == 0 or not math.isfinite(total):
+        return None
+    if isinstance(x, ast.Name) and isinstance(y, ast.Name) and x.id == y.id:
+        merged: ast.expr = copy.deepcopy(x)
+    else:
+        x, y = (definitions.get(t.id, t) if isinstance(t, ast.Name) else t for t in (x, y))
+        (shape, first), (other_shape, second) = _float_constants(x), _float_constants(y)
+        if shape != other_shape:
+            return None
+        means = [_displayed((w1 * a + w2 * b) / (w1 + w2)) for a, b in zip(first, second)]
+        if not all(math.isfinite(mean) for mean in means):
+            return None
+        pairs = iter(means)
+        merged = _FloatConstants(lambda value: number_literal(next(pairs))).visit(copy.deepcopy(x))
+    return merged if total == 1.0 else ast.BinOp(number_literal(total), ast.Mult(), merged)
 
 
 def _negated(node: ast.expr) -> ast.expr:
