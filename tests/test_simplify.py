@@ -388,12 +388,12 @@ def policy(obs):
 
 
 def _merged(code: str) -> list[str]:
-    return [c.code for c in deletion_candidates(code) if c.description.startswith("merged the terms")]
+    return [c.code for c in deletion_candidates(code) if c.description.startswith("merged the alike terms")]
 
 
 def test_terms_alike_but_for_their_constants_are_merged_into_one_by_a_measured_candidate():
-    (merged,) = [c for c in deletion_candidates(BLEND) if c.description.startswith("merged the terms")]
-    assert merged.description == "merged the terms of `0.5068 * action + 0.4948 * action_b`, alike but for their constants, at line 6"
+    (merged,) = [c for c in deletion_candidates(BLEND) if c.description.startswith("merged the alike terms")]
+    assert merged.description == "merged the alike terms of `0.5068 * action + 0.4948 * action_b` into one at line 6"
     # Each constant the weighted mean of the pair, (0.5068 * 0.9069 + 0.4948 * 0.8374) / 1.0016 = 0.8726; the weights' sum in front.
     assert merged.code.endswith("return 1.002 * (0.01541 * obs[21] + np.array([0.8726, 0.128, -0.3417]) * obs[3] ** 2)")
     # Terms written out, a difference, one name twice: 0.3 * 1.5 - 0.1 * 2.5 = 0.2 * 1.0.
@@ -402,13 +402,17 @@ def test_terms_alike_but_for_their_constants_are_merged_into_one_by_a_measured_c
     ]
     assert _merged("def policy(obs):\n    a = 2.0 * obs[0]\n    return 0.25 * a + a * 0.75") == ["def policy(obs):\n    a = 2.0 * obs[0]\n    return a"]
     for differs in (
-        BLEND.replace("obs[3] ** 2\n    return", "obs[4] ** 2\n    return"),  # another observation
         BLEND.replace("    return", "    action_b = action_b + 1.0\n    return"),  # a name assigned twice
         BLEND.replace("    action = 0.0162 * obs[21]", "    obs = 2.0 * obs\n    action = 0.0162 * obs[21]"),  # read from a rebound name
         BLEND.replace("0.5068 * action + 0.4948", "0.5 * action - 0.5"),  # weights that cancel
-        BLEND.replace("0.13, -0.3416", "0.13 * obs[0], -0.3416"),  # an expression where the other has a constant
+        BLEND.replace("obs[21] + np", "obs[20] + np", 1).replace("0.13, -0.3416", "0.13 * obs[0], -0.3416"),  # two subexpressions
+        BLEND.replace("0.0162 * obs[21] + np", "0.0162 * obs[21] - np"),  # at their root
     ):
         assert _merged(differs) == [], differs
+    # One subexpression that differs (here an expression where the other has a constant; or
+    # `obs[3] ** 2` against `obs[4] ** 3`): the weighted sum of the two.
+    (one,) = _merged(BLEND.replace("0.9069, 0.13, -0.3416", "0.9069, 2.143 * obs[13], -0.3416"))
+    assert one.endswith("return 1.002 * (0.01541 * obs[21] + np.array([0.8726, 0.506 * (2.143 * obs[13]) + 0.0622, -0.3417]) * obs[3] ** 2)")
 
 
 def test_a_blend_of_two_near_equal_programs_is_simplified_to_one():
@@ -433,7 +437,7 @@ def test_a_blend_of_two_near_equal_programs_is_simplified_to_one():
         return [score(code) for code in codes]
 
     result = simplify(BLEND, scoring(score_batch))
-    assert result.steps[0].description.startswith("merged the terms of `0.5068 * action + 0.4948 * action_b`")
+    assert result.steps[0].description.startswith("merged the alike terms of `0.5068 * action + 0.4948 * action_b`")
     assert result.code.endswith("return 0.01541 * obs[21] + np.array([0.8726, 0.128, -0.3417]) * obs[3] ** 2")  # and the 1.002 dropped
     assert measure(result.code).params == 4 < measure(BLEND).params == 10
 

@@ -5,14 +5,15 @@ of an `if` statement or of a conditional expression, drop a term of a sum or dif
 factor of a product, a divisor or an exponent, merge two constant factors (`2.0 * (3.0 * x)`
 -> `6.0 * x`, `2.0 * (np.array([1.0, 3.0]) * x)` -> `np.array([2.0, 6.0]) * x`), unwrap a call
 to one of its arguments (`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), keep one operand of
-`and`/`or`, merge two terms alike but for their constants (`0.5 * a + 0.5 * a_b`, where `a` and
-`a_b` are assigned the same expression with other constants, as mutation's blend of two related
-programs writes: one expression, each constant the weighted mean of the pair), and
-replace a subexpression that no drop covers (a call argument, a compared value,
-an assigned or returned value, a branch) by 0.0 or 1.0. The last `return` of the policy is never deleted (a policy
-returning None always fails). Each candidate is cleaned by `remove_dead_code`, so what a
-deletion leaves dead goes with it, and must be strictly smaller (`colmo.astutil.node_count`);
-duplicates (same code) are dropped. Nothing here judges a candidate: scores do.
+`and`/`or`, merge two terms alike but for their constants and at most one subexpression
+(`0.5 * a + 0.5 * a_b`, where `a` and `a_b` are assigned such expressions, as mutation's blend
+of a program and its relative writes: one expression, each constant the weighted mean of the
+pair, the subexpression that differs the weighted sum of the two), and replace a subexpression
+that no drop covers (a call argument, a compared value, an assigned or returned value, a branch)
+by 0.0 or 1.0. The last `return` of the policy is never deleted (a policy returning None always
+fails). Each candidate is cleaned by `remove_dead_code`, so what a deletion leaves dead goes
+with it, and must be strictly smaller (`colmo.astutil.node_count`); duplicates (same code) are
+dropped. Nothing here judges a candidate: scores do.
 """
 
 from __future__ import annotations
@@ -141,7 +142,7 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
                 yield node, f"merged the constant factors of `{_short(node)}` at {where}", replace_with(_merged_factors)
             merged = _merged_terms(node, definitions.get(id(node), {}))
             if merged is not None:
-                yield node, f"merged the terms of `{_short(node)}`, alike but for their constants, at {where}", replace_with(
+                yield node, f"merged the alike terms of `{_short(node)}` into one at {where}", replace_with(
                     lambda n, merged=merged: copy.deepcopy(merged)
                 )
         elif isinstance(node, ast.BoolOp):
@@ -227,26 +228,83 @@ def _single_definitions(function: ast.FunctionDef | ast.AsyncFunctionDef) -> dic
     return single
 
 
-class _FloatConstants(ast.NodeTransformer):
-    """Replaces each float literal (a signed one is one literal) by `replace(its value)`."""
-
-    def __init__(self, replace: Callable[[float], ast.expr]):
-        self.replace = replace
-
-    def visit_UnaryOp(self, node: ast.UnaryOp) -> ast.AST:
-        if is_number_literal(node) and isinstance(node.operand.value, float):
-            return self.replace(ast.literal_eval(node))
-        return self.generic_visit(node)
-
-    def visit_Constant(self, node: ast.Constant) -> ast.AST:
-        return self.replace(node.value) if isinstance(node.value, float) else node
+def _float_value(node: ast.AST) -> Optional[float]:
+    """The value of a float literal (a signed one is one literal), else None."""
+    value = ast.literal_eval(node) if is_number_literal(node) else None
+    return value if isinstance(value, float) else None
 
 
-def _float_constants(node: ast.expr) -> tuple[str, list[float]]:
-    """The shape of `node` (its dump with every float literal 0.0) and its float literals, in order."""
-    values: list[float] = []
-    shape = _FloatConstants(lambda value: values.append(value) or ast.Constant(0.0)).visit(copy.deepcopy(node))
-    return ast.dump(shape), values
+def _weighable(node: Any) -> bool:
+    """An expression whose value a weight may scale: not a container (its elements are merged
+    one by one), nor a constant other than a float (an index, an exponent or a flag)."""
+    if not isinstance(node, ast.expr) or isinstance(node, (ast.List, ast.Tuple, ast.Set, ast.Dict, ast.Starred, ast.Slice)):
+        return False
+    if isinstance(node, ast.Constant) or is_number_literal(node):
+        return _float_value(node) is not None
+    return True
+
+
+@dataclass(frozen=True)
+class _Blend:
+    """Merges two expressions weighted w1 and w2 (w1 + w2 not 0) into one, node by node."""
+
+    w1: float
+    w2: float
+
+    def literal(self, a: float, b: float) -> ast.expr:
+        return number_literal(_displayed((self.w1 * a + self.w2 * b) / (self.w1 + self.w2)))
+
+    def both(self, x: ast.expr, y: ast.expr) -> ast.expr:
+        """`(w1 * x + w2 * y) / (w1 + w2)`, each weight folded into a float literal side."""
+        def share(weight: float, node: ast.expr) -> ast.expr:
+            fraction = weight / (self.w1 + self.w2)
+            value = _float_value(node)
+            if value is not None:
+                return number_literal(_displayed(fraction * value))
+            return ast.BinOp(number_literal(_displayed(fraction)), ast.Mult(), copy.deepcopy(node))
+        left, right = share(self.w1, x), share(self.w2, y)
+        if isinstance(right, ast.UnaryOp):  # a negative literal: `a - 0.15`, not `a + -0.15`
+            return ast.BinOp(left, ast.Sub(), right.operand)
+        return ast.BinOp(left, ast.Add(), right)
+
+    def merged(self, x: Any, y: Any) -> Optional[tuple[Any, int]]:
+        """x and y merged, and how many subexpressions that differ other than by their float
+        constants it had to write as `both` (each counted once, as high in the tree as it
+        takes to make them one); None where they differ at a node that is not an expression."""
+        first, second = _float_value(x), _float_value(y)
+        if first is not None and second is not None:
+            return self.literal(first, second), 0
+        together = self.field_by_field(x, y)
+        if together is not None and together[1] <= 1:
+            return together
+        if _weighable(x) and _weighable(y):
+            return self.both(x, y), 1
+        return together
+
+    def field_by_field(self, x: Any, y: Any) -> Optional[tuple[Any, int]]:
+        """`merged`, where x and y are nodes of one type (or lists, or plain values) merged field
+        by field, never written as `both` at their root."""
+        if isinstance(x, list) and isinstance(y, list):
+            if len(x) != len(y):
+                return None
+            items = [self.merged(a, b) for a, b in zip(x, y)]
+            if any(item is None for item in items):
+                return None
+            return [item[0] for item in items], sum(item[1] for item in items)
+        if not isinstance(x, ast.AST):
+            return (x, 0) if type(x) is type(y) and x == y else None
+        if type(x) is not type(y):
+            return None
+        fields: dict[str, Any] = {}
+        differences = 0
+        for name in x._fields:
+            if isinstance(x, ast.Subscript) and name == "slice" and ast.dump(x.slice) != ast.dump(y.slice):
+                return None  # another element read, not another value
+            item = self.merged(getattr(x, name, None), getattr(y, name, None))
+            if item is None:
+                return None
+            fields[name], differences = item[0], differences + item[1]
+        return type(x)(**fields), differences
 
 
 def _weighted(term: ast.expr) -> tuple[float, ast.expr]:
@@ -264,11 +322,12 @@ def _displayed(value: float) -> float:
 
 def _merged_terms(node: ast.BinOp, definitions: dict[str, ast.expr]) -> Optional[ast.expr]:
     """`w1 * x + w2 * y` (or `-`; a term without a literal factor has weight 1) as one term,
-    when x and y are alike but for their float constants: the same expression, or names of
-    `definitions` assigned such expressions. The term is `(w1 + w2) * m`, where m is x's
-    expression with each float constant the weighted mean (w1 * a + w2 * b) / (w1 + w2) of the
-    pair; exact where the expression is linear in its constants. None where the terms differ
-    otherwise or the weights cancel."""
+    when x and y are alike but for their float constants and at most one subexpression: the
+    same expression, or names of `definitions` assigned such expressions. The term is
+    `(w1 + w2) * m`, m being x's expression with each float constant the weighted mean
+    (w1 * a + w2 * b) / (w1 + w2) of the pair and the subexpression that differs the weighted sum
+    of the two; exact where the expression is linear in its constants. None where the terms
+    differ more, or at their root, or the weights cancel."""
     if not isinstance(node.op, (ast.Add, ast.Sub)):
         return None
     (w1, x), (w2, y) = _weighted(node.left), _weighted(node.right)
@@ -280,14 +339,10 @@ def _merged_terms(node: ast.BinOp, definitions: dict[str, ast.expr]) -> Optional
         merged: ast.expr = copy.deepcopy(x)
     else:
         x, y = (definitions.get(t.id, t) if isinstance(t, ast.Name) else t for t in (x, y))
-        (shape, first), (other_shape, second) = _float_constants(x), _float_constants(y)
-        if shape != other_shape:
+        together = _Blend(w1, w2).field_by_field(x, y)  # the root alike: a merge, not a rewritten sum
+        if together is None or together[1] > 1:
             return None
-        means = [_displayed((w1 * a + w2 * b) / (w1 + w2)) for a, b in zip(first, second)]
-        if not all(math.isfinite(mean) for mean in means):
-            return None
-        pairs = iter(means)
-        merged = _FloatConstants(lambda value: number_literal(next(pairs))).visit(copy.deepcopy(x))
+        merged = together[0]
     return merged if total == 1.0 else ast.BinOp(number_literal(total), ast.Mult(), merged)
 
 
