@@ -8,7 +8,8 @@ making it worse, and measures every step:
   arithmetic folded: `np.abs(4.4)` -> `4.4`). It parses and rewrites code, and evaluates only
   literal arithmetic with trusted functions; it never runs the program.
 - `candidates`: `deletion_candidates`, every one-step deletion of a program (a statement, a
-  branch, a term, a factor, a wrapping call, a subexpression replaced by 0 or 1).
+  branch, a term, a factor, a wrapping call, a subexpression replaced by 0 or 1); with `merge`,
+  two terms alike but for their constants written as one (mutation's blend of relatives).
 - `greedy`: `simplify`, the algorithm and its acceptance rule, with the scoring and re-tuning
   injected; every score it reports is measured.
 - `sandboxed`: `simplify_program`, the algorithm for a task: the referee scores programs in
