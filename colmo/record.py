@@ -268,12 +268,20 @@ class Counters:
     completion_tokens: int = 0
     generation_seconds: float = 0.0  # the stored samples' own generation time (for tokens/s)
     # Per generator, by its label up to the first colon (`llamacpp:<model>` is `llamacpp`): model
-    # calls, programs evaluated, the best training score; what a search of several (`search.fill`) splits.
+    # calls, programs evaluated, the best training score, the island bests its samples set, and
+    # their generation and evaluation seconds; what a search of several (`search.fill`) splits
+    # and what `search.model_share=by_yield` weighs.
     by_generator: dict[str, dict[str, Any]] = field(default_factory=dict)
 
-    def count(self, record: SampleRecord) -> None:
-        entry = self.by_generator.setdefault(record.generator.split(":", 1)[0], {"samples": 0, "programs_evaluated": 0, "best_score": None})
+    def count(self, record: SampleRecord, island_best: bool = False) -> None:
+        """Add one settled sample; `island_best`: it scored above every program of its island before it."""
+        entry = self.by_generator.setdefault(record.generator.split(":", 1)[0], {
+            "samples": 0, "programs_evaluated": 0, "best_score": None, "island_bests": 0, "generation_seconds": 0.0, "evaluation_seconds": 0.0,
+        })
         entry["samples"] += record.model_calls
+        entry["island_bests"] += island_best
+        entry["generation_seconds"] += record.generation_seconds
+        entry["evaluation_seconds"] += record.evaluation_seconds
         if record.status == EVALUATED:
             entry["programs_evaluated"] += 1
             entry["best_score"] = record.score if entry["best_score"] is None else max(entry["best_score"], record.score)

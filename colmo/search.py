@@ -21,7 +21,9 @@ With `search.fill=mutate` the workers do not wait for a slow model: while its ca
 the batches that are in are integrated and the embedded mutation generator (the filler) gives
 idle workers batches of its own, from the same database, so that the model sees what mutation
 found and mutation works on what the model wrote. The mix depends on timing, so such a run is no
-longer a deterministic function of its seed.
+longer a deterministic function of its seed. With `search.model_share=by_yield` the model pauses
+after each call for as long as its yield against the filler's says (`colmo.model_share`), and the
+filler has the workers and the cores meanwhile.
 
 Stopping: `search.max_samples`, `search.stop_at_score`, and `search.max_seconds`, a wall-clock
 limit of the whole run from its `started` (the job's start: `colmo.timelimit.job_start`), with the search's own deadline before it
@@ -54,6 +56,7 @@ from colmo.finish import BestPrograms, finish
 from colmo.generate import Generation, Generator
 from colmo.heldout import training_evaluator
 from colmo.load import LoadMeter
+from colmo.model_share import island_bests_per_cpu_second, model_share, pause_after
 from colmo.optimize.methods import tunes_constants
 from colmo.outcomes import Batch, SampleOutcomes
 from colmo.program import STRUCTURE_KEY_VERSION, parametrize
@@ -103,6 +106,8 @@ class Search:
         self.best_so_far: list[tuple[int, float]] = []
         self.next_sample = self.next_batch = self.in_flight_samples = self.resumed_samples = 0  # resumed: model calls settled earlier
         self.generation_seconds = 0.0
+        self.model_pauses_until = 0.0  # `time.perf_counter()` before which the model is not called (`search.model_share`)
+        self.filler_label = ""  # the label of the filler's samples, once it has made some
         self.stop_reason = ""
         self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=tunes_constants(cfg.gfo))
         if self.store.key_version() != STRUCTURE_KEY_VERSION:  # a new store, or one an older colmo wrote
@@ -172,7 +177,7 @@ class Search:
         if resumed:
             in_flight.append(self._reevaluate(resumed))
         while True:
-            while not self._stop_requested() and len(in_flight) < self.cfg.search.queue_size and self._samples_left() > 0:
+            while self._model_may_call() and len(in_flight) < self.cfg.search.queue_size and self._samples_left() > 0:
                 batch = self._generate(self.sampler.generator, self._batch_size())
                 if batch is None:
                     break
@@ -254,9 +259,41 @@ class Search:
             batch.outcomes.append(self.outcomes.submit(sample, answer.reading, self.database))
         calls = sum(sample.generation.calls for sample in samples)
         self.in_flight_samples += calls
+        label = samples[0].generation.generator.split(":", 1)[0] if samples else ""
         if generator is self.sampler.generator:  # duplicates and failures settle at once: the others are tuned
             self.budget.follow_generation(self._samples_left(), calls, seconds, sum(not outcome.done() for outcome in batch.outcomes))
+            self._pause_model(label, seconds)
+        elif label:
+            self.filler_label = label
         return batch
+
+    def _pause_model(self, label: str, call_seconds: float) -> None:
+        """With `search.model_share=by_yield`, when the model may call next (`colmo.model_share`)."""
+        if self.cfg.search.model_share == "always" or self.sampler.filler is None:
+            return
+        by_generator = self.counters.by_generator
+        model, filler = by_generator.get(label, {}), by_generator.get(self.filler_label, {})
+        model_cores, filler_cores = self.sampler.generator.cores(), self.sampler.filler.cores()
+        share = model_share(model, model_cores, filler, filler_cores, self.cfg.search.min_model_share)
+        pause = pause_after(call_seconds, share)
+        self.model_pauses_until = time.perf_counter() + pause
+        log.info(
+            "model share %.2f (island bests per 1000 CPU-seconds: %s %.2f, %s %.2f): its next call in %.1f s",
+            share, label, 1000 * island_bests_per_cpu_second(model, model_cores),
+            self.filler_label or "filler", 1000 * island_bests_per_cpu_second(filler, filler_cores), pause,
+        )
+
+    def _model_may_call(self) -> bool:
+        """Whether the model may be called now: once its pause is over, the filler filling the
+        workers meanwhile; False if the search is stopping."""
+        while not self._stop_requested() and time.perf_counter() < self.model_pauses_until:
+            self._fill()
+            unsettled = [outcome for batch in self.in_flight for outcome in batch.outcomes if not outcome.done()]
+            if unsettled:
+                concurrent.futures.wait(unsettled, timeout=POLL_S, return_when=concurrent.futures.FIRST_COMPLETED)
+            else:
+                time.sleep(POLL_S)
+        return not self._stop_requested()
 
     def _abandon_generation(self, programs: int) -> bool:
         """Asked while the generator's call is in flight: whether to abandon it (the search is
@@ -314,7 +351,10 @@ class Search:
 
     def _apply(self, record: SampleRecord) -> None:
         """Count one settled sample and register it in the database, in sample order."""
-        self.counters.count(record)
+        island_best = (
+            record.status == EVALUATED and record.score is not None and record.score > self.database.best_per_island[record.island]
+        )
+        self.counters.count(record, island_best)
         if record.status == EVALUATED:
             before = self.database.best.score
             self.database.register(StoredProgram(record.key, record.code, record.score, record.island, record.sample, record.nodes, record.coverage))

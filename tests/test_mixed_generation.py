@@ -5,8 +5,11 @@ the results by generator."""
 
 from __future__ import annotations
 
+import logging
+import re
 import sqlite3
 import threading
+import time
 
 from conftest import compose, refused
 
@@ -57,3 +60,54 @@ def test_fill_names_a_generator_colmo_can_fill_with(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code, line = refused(colmo, "search.fill=llamacpp")
     assert code == 2 and "search.fill must be null or mutate, got 'llamacpp'" in line
+
+
+class UnhelpfulModel(SlowModel):
+    """A slow model that never writes a program, on one core; records when each call began and ended."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.began, self.ended = [], []
+
+    def cores(self) -> int:
+        return 1
+
+    def generate(self, prompt, n):
+        self.began.append(time.perf_counter())
+        self.cancelled.wait(0.5)
+        self.ended.append(time.perf_counter())
+        return [Generation("I cannot help with that.", "unhelpful-model:test", completion_tokens=5, seconds=0.5) for _ in range(n)]
+
+
+def test_by_yield_a_model_that_sets_no_island_best_pauses_while_mutation_has_the_workers(tmp_path, caplog):
+    cfg = compose(
+        "search", "search.fill=mutate", "search.model_share=by_yield", "search.min_model_share=0.2", "search.max_samples=40",
+        "search.duplicate_retries=0",
+        "llm.batch_size=1", "search.queue_size=1", "database.num_islands=1", *TINY,
+    )
+    model = UnhelpfulModel()
+    with caplog.at_level(logging.INFO, logger="colmo.search"):
+        summary = Search(cfg, tmp_path / "run", generator=model).run()
+    said = [re.search(r"model share ([\d.]+) .*its next call in ([\d.]+) s", message) for message in caplog.messages]
+    shares = [(float(found[1]), float(found[2])) for found in said if found]
+    assert len(shares) == len(model.ended) >= 2
+    assert all(0.2 <= share <= 1 for share, _ in shares)
+    # Each call begins no sooner than the pause said after the one before it.
+    for (_, pause), ended, began in zip(shares, model.ended, model.began[1:]):
+        assert began - ended >= pause - 0.05
+    split = summary.by_generator
+    assert split["mutate"]["island_bests"] >= 1 and split["unhelpful-model"]["island_bests"] == 0
+    assert split["unhelpful-model"]["generation_seconds"] >= 0.5 * split["unhelpful-model"]["samples"]
+    assert split["mutate"]["evaluation_seconds"] > 0
+    # Once mutation has set an island best, the model's yield is below mutation's: it calls for less than half the time.
+    assert min(share for share, _ in shares) < 0.5
+
+
+def test_model_share_by_yield_needs_a_filler_and_a_share_in_range(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, line = refused(colmo, "search.model_share=by_yield")
+    assert code == 2 and "search.model_share=by_yield needs search.fill=mutate" in line
+    code, line = refused(colmo, "search.fill=mutate", "search.model_share=sometimes")
+    assert code == 2 and "search.model_share must be one of always, by_yield, got 'sometimes'" in line
+    code, line = refused(colmo, "search.fill=mutate", "search.model_share=by_yield", "search.min_model_share=0")
+    assert code == 2 and "search.min_model_share must be in (0, 1], got 0" in line

@@ -10,6 +10,8 @@ from typing import Optional
 from colmo.config.fields import above, at_least, option, require
 from colmo.config.task import MAX_EPISODES_HELP, PRECISION_HELP, ROBUSTNESS_DELAYS, ROBUSTNESS_MAGNITUDES, check_robustness_grid
 
+MODEL_SHARES = ("always", "by_yield")  # `search.model_share`: colmo.model_share
+
 
 @dataclass
 class DatabaseConfig:
@@ -126,12 +128,24 @@ class SearchLoopConfig:
         "(the generator's included) keep idle workers busy, in the same islands; samples record which generator made them "
         "(a run is then no longer a deterministic function of its seed: the mix depends on timing)",
     )
+    model_share: str = option(
+        "always", "with search.fill: always (the model is called back to back) or by_yield (after each call the model pauses, "
+        "so that it calls for the share of the time its island bests per CPU-second earn against the filler's; the filler "
+        "has the cores meanwhile)",
+    )
+    min_model_share: float = option(0.1, "with search.model_share=by_yield: the least share of the time the model calls for")
     progress: bool = option(True, "live progress display on a terminal, a plain line every progress_every_s otherwise")
     progress_every_s: float = option(30.0, "seconds between plain progress lines when stderr is not a terminal")
 
     def __post_init__(self) -> None:
         at_least(self, "search", max_samples=1, queue_size=1, duplicate_retries=0)
         require(self.fill in (None, "mutate"), f"search.fill must be null or mutate, got {self.fill!r}")
+        require(self.model_share in MODEL_SHARES, f"search.model_share must be one of {', '.join(MODEL_SHARES)}, got {self.model_share!r}")
+        require(
+            self.model_share == "always" or self.fill is not None,
+            "search.model_share=by_yield needs search.fill=mutate (the filler has the workers while the model pauses)",
+        )
+        require(0 < self.min_model_share <= 1, f"search.min_model_share must be in (0, 1], got {self.min_model_share}")
         require(self.max_seconds >= 0, f"search.max_seconds must be >= 0 (0 = no limit), got {self.max_seconds}")
         above(self, "search", progress_every_s=0)
 

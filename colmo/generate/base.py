@@ -129,6 +129,11 @@ class Generator(abc.ABC):
         another thread while `generate` runs."""
         return None
 
+    def cores(self) -> int:
+        """The cores of this machine its calls keep busy while they run (0: the work is done
+        elsewhere, a server or a GPU); what `search.model_share=by_yield` charges for its time."""
+        return 0
+
     def close(self) -> None:
         """Release connections, threads or GPU memory."""
 

@@ -127,6 +127,9 @@ class LlamaCppGenerator(LanguageModelGenerator):
         )
         return Generation(text, self.name, prompt_tokens, completion_tokens, seconds, form=self.form, context=self.context(prompt))
 
+    def cores(self) -> int:
+        return self.cfg.n_threads if self.cfg.n_gpu_layers == 0 else 0  # offloaded layers run on the GPU
+
     def close(self) -> None:
         llm, self._llm = self._llm, None
         if llm is not None:

@@ -81,6 +81,9 @@ class MutateGenerator(Generator):
         # The operators and their probabilities for a scalar action (False) and a vector one (True).
         self._mutations = {vector: _weighted(MUTATIONS + (ACTUATOR_MUTATIONS if vector else ())) for vector in (False, True)}
 
+    def cores(self) -> int:
+        return 1  # it mutates, and probes its children, in the search's thread
+
     def generate(self, prompt: Prompt, n: int) -> list[Generation]:
         parents = []
         for code in prompt.programs:

@@ -360,7 +360,8 @@ def track_optimize(cfg: OptimizeConfig, result: dict[str, Any], files: Sequence[
 
 def _split(summary: Summary) -> dict[str, Optional[float]]:
     """A search of more than one generator (`search.fill`): each one's samples, programs
-    evaluated and best score, as `<metric>_<generator>`."""
+    evaluated, best score and island bests, as `<metric>_<generator>`."""
     if len(summary.by_generator) < 2:
         return {}
-    return {f"{metric}_{name}": entry[metric] for name, entry in summary.by_generator.items() for metric in ("samples", "programs_evaluated", "best_score")}
+    metrics = ("samples", "programs_evaluated", "best_score", "island_bests")
+    return {f"{metric}_{name}": entry.get(metric) for name, entry in summary.by_generator.items() for metric in metrics}

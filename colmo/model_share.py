@@ -1,0 +1,44 @@
+"""The model's share of the wall clock beside the filler (`search.model_share`, with `search.fill`).
+
+With `always` a search calls its model back to back, as it does without a filler. With
+`by_yield` it measures, as it goes, what each generator's samples yield for what they cost:
+the island bests they set (a sample scoring above every program of its island so far) per
+CPU-second (their programs' evaluation, and for the model its calls times the cores of this
+machine they keep busy, `Generator.cores`). After each call the model pauses so that it calls
+for a share of the time equal to its yield's part of the two yields, and never less than
+`search.min_model_share`; while it pauses the filler has the workers and the cores. A model
+that pays on this machine is called often; one that does not costs little, and is still asked
+now and then, since its programs and what it makes of mutation's change as the search goes.
+This is probability matching over two arms whose pulls are shares of time, each rate starting
+from one island best in `PRIOR_CPU_S` so that neither is judged on its first few samples.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+PRIOR_CPU_S = 100.0  # one pseudo island best in this many CPU-seconds, for each generator
+
+
+def cpu_seconds(entry: Mapping[str, Any], cores: int) -> float:
+    """What one generator's samples cost (`Counters.by_generator`'s entry): their evaluation, and
+    their generation times the cores it keeps busy."""
+    return entry.get("evaluation_seconds", 0.0) + entry.get("generation_seconds", 0.0) * cores
+
+
+def island_bests_per_cpu_second(entry: Mapping[str, Any], cores: int) -> float:
+    """One generator's yield so far, with one pseudo island best in `PRIOR_CPU_S`."""
+    return (entry.get("island_bests", 0) + 1) / (cpu_seconds(entry, cores) + PRIOR_CPU_S)
+
+
+def model_share(model: Mapping[str, Any], model_cores: int, filler: Mapping[str, Any], filler_cores: int, floor: float) -> float:
+    """The share of the wall clock the model calls for: its yield's part of the two, at least
+    `floor`; each generator's `Counters.by_generator` entry and `Generator.cores`."""
+    model_yield = island_bests_per_cpu_second(model, model_cores)
+    filler_yield = island_bests_per_cpu_second(filler, filler_cores)
+    return max(floor, model_yield / (model_yield + filler_yield))
+
+
+def pause_after(call_seconds: float, share: float) -> float:
+    """How long the model waits after a call of `call_seconds` so that it calls for `share` of the time."""
+    return call_seconds * (1.0 - share) / share
