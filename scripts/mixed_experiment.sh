@@ -4,18 +4,22 @@
 #   mixed:  the 1.5B model in process (one thread) with search.fill=mutate
 #   mutate: colmo's embedded mutation alone
 #   model:  the 1.5B model alone (seed 0 only)
+#   by_yield: mixed, the model's share of the time following its yield (search.model_share=by_yield)
 # Seed 0 of every variant first, then seeds 1 and 2. Each run is a one-job sweep into its own
 # directory, so running this again keeps what finished and resumes the rest.
 #
-#   scripts/mixed_experiment.sh OUT [TASK ...]        (default tasks: pendulum cheetah)
+#   [VARIANTS="by_yield mutate"] scripts/mixed_experiment.sh OUT [TASK ...]
+#                          (default: every variant; tasks: pendulum cheetah)
 #   python scripts/mixed_summary.py OUT               the table of what has finished
 set -u
 out=$(mkdir -p "$1" && cd "$1" && pwd); shift
 tasks=${*:-pendulum cheetah}
+variants=" ${VARIANTS:-mixed mutate model by_yield} "
 model=$(python "$(dirname "$0")/fetch_test_model.py" --size 1.5b)
 cd "$out"
 run() {  # task variant seed overrides...
   local task=$1 variant=$2 seed=$3; shift 3
+  case "$variants" in *" $variant "*) ;; *) return ;; esac
   colmo -m "task=$task" "seed=$seed" search.max_seconds=1800 search.max_samples=1000000 search.progress=false \
     "hydra.sweep.dir=$task/$variant/s$seed" "$@" || echo "run $task $variant s$seed exited $?"
 }
@@ -24,5 +28,6 @@ for seed in 0 1 2; do
     run "$task" mixed "$seed" llm=llamacpp "llm.model_path=$model" search.fill=mutate
     run "$task" mutate "$seed" llm=mutate
     if [ "$seed" = 0 ]; then run "$task" model "$seed" llm=llamacpp "llm.model_path=$model"; fi
+    run "$task" by_yield "$seed" llm=llamacpp "llm.model_path=$model" search.fill=mutate search.model_share=by_yield
   done
 done

@@ -4,7 +4,7 @@
 
 Per run (OUT/<task>/<variant>/s<seed>/<job>/summary.json, or without the job directory as the
 results pages keep them, e.g. docs/mixed-generation): the best training and held-out scores,
-samples, each generator's share, the simplified winner's lines and parameters, and the machine's
+samples, each generator's share (and its island bests and time calling, where recorded), the simplified winner's lines and parameters, and the machine's
 mean load average over the run (— for a run from before colmo recorded it). Then per task,
 each variant against mutation alone: the difference of means with its bootstrap interval
 (`colmo.comparison.difference`), training and held-out.
@@ -26,15 +26,24 @@ def _score(value: float | None) -> str:
     return "—" if value is None else f"{value:.1f}"
 
 
+def _generator(name: str, entry: dict, seconds: float) -> str:
+    """One generator's part of a run: samples, programs evaluated, best score, and where the run
+    recorded them (colmo since search.model_share) its island bests and the share of the run's
+    time it spent generating, where that is more than 5%."""
+    parts = [f"{entry['programs_evaluated']} evaluated", f"best {_score(entry['best_score'])}"]
+    if "island_bests" in entry:
+        parts.append(f"{entry['island_bests']} island bests")
+        if entry["generation_seconds"] > 0.05 * seconds:
+            parts.append(f"calling {entry['generation_seconds'] / seconds:.0%} of the time")
+    return f"{name} {entry['samples']} ({', '.join(parts)})"
+
+
 def row(path: Path) -> dict:
     summary = json.loads(path.read_text())
     at = max(i for i, part in enumerate(path.parts) if re.fullmatch(r"s\d+", part))  # the seed's directory
     task, variant, seed = path.parts[at - 2], path.parts[at - 1], path.parts[at]
     simplified = summary.get("simplified") or {}
-    split = ", ".join(
-        f"{name} {entry['samples']} ({entry['programs_evaluated']} evaluated, best {_score(entry['best_score'])})"
-        for name, entry in summary.get("by_generator", {}).items()
-    )
+    split = ", ".join(_generator(name, entry, summary["seconds"]) for name, entry in summary.get("by_generator", {}).items())
     return {
         "task": task,
         "variant": variant,

@@ -51,3 +51,18 @@ def test_runs_of_several_directories_compare_the_results_pages_layout_too(tmp_pa
     assert "| 4 | 2 | 1790 | 2.1 |" in text and "| 4 | 2 | 1790 | — |" in text  # each run's load, where it was recorded
     (line,) = [line for line in text.splitlines() if line.startswith("| pendulum | default | 3 vs 3 |")]
     assert line.startswith("| pendulum | default | 3 vs 3 | +90.0, 95% interval [")
+
+
+def test_a_run_that_recorded_island_bests_shows_them_and_the_models_time_calling(tmp_path: Path) -> None:
+    _run(tmp_path, "by_yield", 0, 800.0, 790.0)
+    summary_path = tmp_path / "pendulum" / "by_yield" / "s0" / "0_job" / "summary.json"
+    summary = json.loads(summary_path.read_text())
+    summary["by_generator"] = {
+        "mutate": {"samples": 400, "programs_evaluated": 390, "best_score": 800.0, "island_bests": 80, "generation_seconds": 15.0,
+                   "evaluation_seconds": 3000.0},
+        "llamacpp": {"samples": 12, "programs_evaluated": 5, "best_score": 500.0, "island_bests": 1, "generation_seconds": 358.0,
+                     "evaluation_seconds": 90.0},
+    }
+    summary_path.write_text(json.dumps(summary))
+    text = subprocess.run([sys.executable, str(SCRIPT), str(tmp_path)], capture_output=True, text=True, check=True).stdout
+    assert "mutate 400 (390 evaluated, best 800.0, 80 island bests), llamacpp 12 (5 evaluated, best 500.0, 1 island bests, calling 20% of the time)" in text
