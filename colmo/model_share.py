@@ -15,8 +15,14 @@ from one island best in `PRIOR_CPU_S` so that neither is judged on its first few
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+import logging
+import time
+from typing import TYPE_CHECKING, Any, Mapping, Optional
 
+if TYPE_CHECKING:
+    from colmo.generate import Generator
+
+log = logging.getLogger("colmo.search")
 PRIOR_CPU_S = 100.0  # one pseudo island best in this many CPU-seconds, for each generator
 
 
@@ -42,3 +48,33 @@ def model_share(model: Mapping[str, Any], model_cores: int, filler: Mapping[str,
 def pause_after(call_seconds: float, share: float) -> float:
     """How long the model waits after a call of `call_seconds` so that it calls for `share` of the time."""
     return call_seconds * (1.0 - share) / share
+
+
+class ModelShare:
+    """When a search's model may call next: at once with `always`; with `by_yield`, after the
+    pause its share says, measured on the generators' samples settled by the end of each call."""
+
+    def __init__(self, mode: str, floor: float):
+        self.by_yield = mode == "by_yield"
+        self.floor = floor
+        self.pauses_until = 0.0  # `time.perf_counter()` before which the model is not called
+        self.filler_label = ""  # the label of the filler's samples (`Counters.by_generator`), once it has made some
+
+    def called(
+        self, model: "Generator", label: str, seconds: float, filler: Optional["Generator"], by_generator: Mapping[str, Mapping[str, Any]],
+    ) -> None:
+        """The model, whose samples are `label`'s, has answered a call of `seconds`."""
+        if not self.by_yield or filler is None:
+            return
+        mine, filler_entry = by_generator.get(label, {}), by_generator.get(self.filler_label, {})
+        share = model_share(mine, model.cores(), filler_entry, filler.cores(), self.floor)
+        pause = pause_after(seconds, share)
+        self.pauses_until = time.perf_counter() + pause
+        log.info(
+            "model share %.2f (island bests per 1000 CPU-seconds: %s %.2f, %s %.2f): its next call in %.1f s",
+            share, label, 1000 * island_bests_per_cpu_second(mine, model.cores()),
+            self.filler_label or "filler", 1000 * island_bests_per_cpu_second(filler_entry, filler.cores()), pause,
+        )
+
+    def paused(self) -> bool:
+        return time.perf_counter() < self.pauses_until

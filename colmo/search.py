@@ -56,7 +56,7 @@ from colmo.finish import BestPrograms, finish
 from colmo.generate import Generation, Generator
 from colmo.heldout import training_evaluator
 from colmo.load import LoadMeter
-from colmo.model_share import island_bests_per_cpu_second, model_share, pause_after
+from colmo.model_share import ModelShare
 from colmo.optimize.methods import tunes_constants
 from colmo.outcomes import Batch, SampleOutcomes
 from colmo.program import STRUCTURE_KEY_VERSION, parametrize
@@ -106,8 +106,7 @@ class Search:
         self.best_so_far: list[tuple[int, float]] = []
         self.next_sample = self.next_batch = self.in_flight_samples = self.resumed_samples = 0  # resumed: model calls settled earlier
         self.generation_seconds = 0.0
-        self.model_pauses_until = 0.0  # `time.perf_counter()` before which the model is not called (`search.model_share`)
-        self.filler_label = ""  # the label of the filler's samples, once it has made some
+        self.model_share = ModelShare(cfg.search.model_share, cfg.search.min_model_share)
         self.stop_reason = ""
         self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, by_structure=tunes_constants(cfg.gfo))
         if self.store.key_version() != STRUCTURE_KEY_VERSION:  # a new store, or one an older colmo wrote
@@ -262,31 +261,15 @@ class Search:
         label = samples[0].generation.generator.split(":", 1)[0] if samples else ""
         if generator is self.sampler.generator:  # duplicates and failures settle at once: the others are tuned
             self.budget.follow_generation(self._samples_left(), calls, seconds, sum(not outcome.done() for outcome in batch.outcomes))
-            self._pause_model(label, seconds)
+            self.model_share.called(generator, label, seconds, self.sampler.filler, self.counters.by_generator)
         elif label:
-            self.filler_label = label
+            self.model_share.filler_label = label
         return batch
-
-    def _pause_model(self, label: str, call_seconds: float) -> None:
-        """With `search.model_share=by_yield`, when the model may call next (`colmo.model_share`)."""
-        if self.cfg.search.model_share == "always" or self.sampler.filler is None:
-            return
-        by_generator = self.counters.by_generator
-        model, filler = by_generator.get(label, {}), by_generator.get(self.filler_label, {})
-        model_cores, filler_cores = self.sampler.generator.cores(), self.sampler.filler.cores()
-        share = model_share(model, model_cores, filler, filler_cores, self.cfg.search.min_model_share)
-        pause = pause_after(call_seconds, share)
-        self.model_pauses_until = time.perf_counter() + pause
-        log.info(
-            "model share %.2f (island bests per 1000 CPU-seconds: %s %.2f, %s %.2f): its next call in %.1f s",
-            share, label, 1000 * island_bests_per_cpu_second(model, model_cores),
-            self.filler_label or "filler", 1000 * island_bests_per_cpu_second(filler, filler_cores), pause,
-        )
 
     def _model_may_call(self) -> bool:
         """Whether the model may be called now: once its pause is over, the filler filling the
         workers meanwhile; False if the search is stopping."""
-        while not self._stop_requested() and time.perf_counter() < self.model_pauses_until:
+        while not self._stop_requested() and self.model_share.paused():
             self._fill()
             unsettled = [outcome for batch in self.in_flight for outcome in batch.outcomes if not outcome.done()]
             if unsettled:
