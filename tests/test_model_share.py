@@ -4,9 +4,11 @@ the pause after a call that gives it that share."""
 
 from __future__ import annotations
 
+import time
+
 import pytest
 
-from colmo.model_share import PRIOR_CPU_S, cpu_seconds, island_bests_per_cpu_second, model_share, pause_after
+from colmo.model_share import PRIOR_CPU_S, ModelShare, cpu_seconds, island_bests_per_cpu_second, model_share, pause_after
 
 
 def entry(island_bests: int, evaluation_seconds: float, generation_seconds: float = 0.0) -> dict:
@@ -42,3 +44,30 @@ def test_the_pause_after_a_call_gives_the_model_its_share_of_the_time():
     assert pause_after(30.0, 1.0) == 0.0
     assert pause_after(30.0, 0.5) == pytest.approx(30.0)
     assert pause_after(30.0, 0.1) == pytest.approx(270.0)  # 30 s calling in every 300
+
+
+class OnCores:
+    """A generator as `ModelShare` sees one: the cores its calls keep busy."""
+
+    def __init__(self, cores: int) -> None:
+        self.n = cores
+
+    def cores(self) -> int:
+        return self.n
+
+
+def test_by_yield_the_model_pauses_after_a_call_and_always_it_never_does():
+    by_generator = {"model": entry(0, 100.0, 300.0), "mutate": entry(40, 900.0, 10.0)}
+    always = ModelShare("always", 0.1)
+    always.called(OnCores(1), "model", 60.0, OnCores(1), by_generator)
+    assert not always.paused()
+    pacing = ModelShare("by_yield", 0.1)
+    pacing.filler_label = "mutate"
+    before = time.perf_counter()
+    pacing.called(OnCores(1), "model", 60.0, OnCores(1), by_generator)
+    assert pacing.paused()
+    # Yields 1/500 against 41/1010: held at the floor, the model waits nine times its call.
+    assert pacing.pauses_until - before >= pause_after(60.0, 0.1) == pytest.approx(540.0)
+    without_filler = ModelShare("by_yield", 0.1)
+    without_filler.called(OnCores(1), "model", 60.0, None, by_generator)
+    assert not without_filler.paused()
