@@ -482,3 +482,20 @@ def test_a_continued_tracker_keeps_the_rows_and_curves_logged_before(store, tmp_
     after.on_finish(_summary(tmp_path, "max_samples"))
     assert run.client.load_table(run.experiment_id, "programs.json", run_ids=[run.run_id])["sample"].tolist() == [0, 1, 2]
     assert run.client.get_run(run.run_id).info.status == "FINISHED"
+
+
+def test_a_search_of_two_generators_logs_each_ones_samples_best_and_island_bests(store, tmp_path, monkeypatch):
+    monkeypatch.setenv("MLFLOW_TRACKING_URI", store)
+    run = _tracked(store)
+    tracker = MlflowTracker(run, table_every_s=0.0)
+    tracker.on_batch(_report(0, 1.0), [_record(0, 1.0)])
+    split = {
+        "mutate": {"samples": 40, "programs_evaluated": 38, "best_score": 3.0, "island_bests": 9, "generation_seconds": 1.0, "evaluation_seconds": 80.0},
+        "llamacpp": {"samples": 4, "programs_evaluated": 2, "best_score": 2.0, "island_bests": 1, "generation_seconds": 90.0, "evaluation_seconds": 9.0},
+    }
+    tracker.on_finish(dataclasses.replace(_summary(tmp_path, "max_seconds"), by_generator=split))
+    metrics = run.client.get_run(run.run_id).data.metrics
+    assert {name: metrics[name] for name in metrics if name.endswith(("_mutate", "_llamacpp"))} == {
+        "samples_mutate": 40, "programs_evaluated_mutate": 38, "best_score_mutate": 3.0, "island_bests_mutate": 9,
+        "samples_llamacpp": 4, "programs_evaluated_llamacpp": 2, "best_score_llamacpp": 2.0, "island_bests_llamacpp": 1,
+    }
