@@ -45,6 +45,11 @@ class Sample:
     generation: Generation
 
 
+def generator_label(generator: str) -> str:
+    """What reports split a search by: a sample's generator up to the first colon (`llamacpp:<model>` is `llamacpp`)."""
+    return generator.split(":", 1)[0]
+
+
 def finite_or_none(value: float) -> Optional[float]:
     """JSON has no infinity: a failed score is stored and reported as null."""
     return value if math.isfinite(value) else None
@@ -199,7 +204,7 @@ class Summary(Totals):
     startup_seconds: float = 0.0
     search_seconds: float = 0.0
     # Per generator (`mutate`, `llamacpp`, ...: `Counters.by_generator`): model calls, programs
-    # evaluated and the best training score.
+    # evaluated, the best training score, island bests, generation and evaluation seconds.
     by_generator: dict = field(default_factory=dict)
     cpus: int = field(default_factory=lambda: os.cpu_count() or 0)  # the machine's, beside `load`
 
@@ -267,7 +272,7 @@ class Counters:
     steps: int = 0
     completion_tokens: int = 0
     generation_seconds: float = 0.0  # the stored samples' own generation time (for tokens/s)
-    # Per generator, by its label up to the first colon (`llamacpp:<model>` is `llamacpp`): model
+    # Per generator, by its label (`generator_label`): model
     # calls, programs evaluated, the best training score, the island bests its samples set, and
     # their generation and evaluation seconds; what a search of several (`search.fill`) splits
     # and what `search.model_share=by_yield` weighs.
@@ -275,7 +280,7 @@ class Counters:
 
     def count(self, record: SampleRecord, island_best: bool = False) -> None:
         """Add one settled sample; `island_best`: it scored above every program of its island before it."""
-        entry = self.by_generator.setdefault(record.generator.split(":", 1)[0], {
+        entry = self.by_generator.setdefault(generator_label(record.generator), {
             "samples": 0, "programs_evaluated": 0, "best_score": None, "island_bests": 0, "generation_seconds": 0.0, "evaluation_seconds": 0.0,
         })
         entry["samples"] += record.model_calls

@@ -74,6 +74,7 @@ from colmo.record import (
     SearchObserver,
     Summary,
     Totals,
+    generator_label,
 )
 from colmo.sampler import POLL_S, Sampler
 from colmo.signals import stop_signals
@@ -258,7 +259,7 @@ class Search:
             batch.outcomes.append(self.outcomes.submit(sample, answer.reading, self.database))
         calls = sum(sample.generation.calls for sample in samples)
         self.in_flight_samples += calls
-        label = samples[0].generation.generator.split(":", 1)[0] if samples else ""
+        label = generator_label(samples[0].generation.generator) if samples else ""
         if generator is self.sampler.generator:  # duplicates and failures settle at once: the others are tuned
             self.budget.follow_generation(self._samples_left(), calls, seconds, sum(not outcome.done() for outcome in batch.outcomes))
             self.model_share.called(generator, label, seconds, self.sampler.filler, self.counters.by_generator)

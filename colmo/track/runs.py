@@ -364,4 +364,4 @@ def _split(summary: Summary) -> dict[str, Optional[float]]:
     if len(summary.by_generator) < 2:
         return {}
     metrics = ("samples", "programs_evaluated", "best_score", "island_bests")
-    return {f"{metric}_{name}": entry.get(metric) for name, entry in summary.by_generator.items() for metric in metrics}
+    return {f"{metric}_{name}": entry[metric] for name, entry in summary.by_generator.items() for metric in metrics}
