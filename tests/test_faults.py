@@ -11,6 +11,7 @@ settings, empty and corrupt stores, and directories that cannot be written.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import os
@@ -22,7 +23,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import compose, refused, run_colmo, start_colmo, wait_for
+from conftest import children_of, compose, refused, run_colmo, start_colmo, wait_for
 
 from colmo.__main__ import main as colmo
 from colmo.program import STRUCTURE_KEY_VERSION, structure_key
@@ -72,6 +73,27 @@ def being_tuned(run_dir: Path) -> bool:
     return bool(before & pending_samples(run_dir))
 
 
+def descendants_of(pid: int) -> list[int]:
+    children = children_of(pid)
+    return children + [grandchild for child in children for grandchild in descendants_of(child)]
+
+
+def frozen_in_tuning(pid: int, run_dir: Path) -> bool:
+    """Stop (SIGSTOP) the search's workers and their evaluations; true if samples are then pending
+    (in flight, or queued behind them), otherwise let the workers go on and false."""
+    workers = descendants_of(pid)
+    for worker in workers:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(worker, signal.SIGSTOP)
+    if pending_samples(run_dir):
+        return True
+    for worker in workers:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(worker, signal.SIGCONT)
+    time.sleep(0.2)
+    return False
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_stop_signal_finishes_the_programs_in_flight_and_loses_nothing(tmp_path, signum):
     process = start(tmp_path, "search.max_samples=1000", *TINY, *SLOW)
@@ -95,7 +117,9 @@ def test_a_stop_signal_finishes_the_programs_in_flight_and_loses_nothing(tmp_pat
 def test_a_second_signal_stores_the_programs_in_flight_as_interrupted_and_resume_evaluates_them(tmp_path, monkeypatch):
     process = start(tmp_path, "search.max_samples=8", *TINY, *SLOW)
     run_dir = run_dir_of(tmp_path)
-    wait_for(lambda: being_tuned(run_dir), timeout=600, what="programs in tuning")
+    # The first signal lets the programs in flight finish at their next candidate, within moments:
+    # their workers are frozen so that they are still in flight when the second signal comes.
+    wait_for(lambda: frozen_in_tuning(process.pid, run_dir), timeout=600, what="programs in tuning, their workers frozen")
     process.send_signal(signal.SIGINT)
     # Signals of one kind do not queue: the second is sent once the first has been handled.
     for line in process.stderr:
