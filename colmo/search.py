@@ -55,17 +55,15 @@ from colmo.executor import make_executor
 from colmo.finish import BestPrograms, finish
 from colmo.generate import Generation, Generator
 from colmo.heldout import training_evaluator
+from colmo.ledger import Ledger
 from colmo.load import LoadMeter
 from colmo.model_share import ModelShare
 from colmo.optimize.methods import tunes_constants
 from colmo.outcomes import Batch, SampleOutcomes
 from colmo.program import STRUCTURE_KEY_VERSION, parametrize
 from colmo.record import (
-    EVALUATED,
     FINISHED,
-    INTERRUPTED,
     PENDING,
-    TO_EVALUATE_AGAIN,
     BatchReport,
     Counters,
     Elapsed,
@@ -104,7 +102,6 @@ class Search:
         self.executor = executor or make_executor(cfg.executor)
         self.in_flight: deque[Batch] = deque()
         self.counters = Counters()
-        self.best_so_far: list[tuple[int, float]] = []
         self.next_sample = self.next_batch = self.in_flight_samples = self.resumed_samples = 0  # resumed: model calls settled earlier
         self.generation_seconds = 0.0
         self.model_share = ModelShare(cfg.search.model_share, cfg.search.min_model_share)
@@ -124,6 +121,7 @@ class Search:
         self.budget = TimeBudget(cfg.search.max_seconds, self.outcomes.running, started=started, tuned=tunes_constants(cfg.gfo), spent=self.earlier.seconds)
         self.evaluator: Optional[Evaluator] = None
         self.database: Optional[ProgramDatabase] = None
+        self.ledger: Optional[Ledger] = None
 
     # -- the run, top to bottom --------------------------------------------------------------
 
@@ -140,7 +138,7 @@ class Search:
                 starter = self._starter()
                 self.database = ProgramDatabase(self.cfg.database, starter, self.cfg.seed)
                 self.budget.plan(self.cfg, self.evaluator.calibration, self.program_seconds, self.executor)
-                self.best_so_far = [(0, self.database.best.score)]
+                self.ledger = Ledger(self.database, self.counters)
                 to_evaluate = self._replay(starter.key)
                 self.sampler.start(self.evaluator)
                 self.budget.search_starts()
@@ -162,7 +160,8 @@ class Search:
                 )
             best_program = self.database.best if self.database else None
             summary = best.summary(
-                self.cfg.task.name, best_program, self.best_so_far, self.stop_reason, self.run_dir, self.totals(), *self.budget.phases(),
+                self.cfg.task.name, best_program, self.ledger.best_so_far if self.ledger else (), self.stop_reason, self.run_dir,
+                self.totals(), *self.budget.phases(),
                 by_generator=self.counters.by_generator,
             )
             write_outputs(summary, self.run_dir)
@@ -204,30 +203,17 @@ class Search:
         return StoredProgram(starter.key, starter.code, starter.score, 0, STARTER_SAMPLE, starter.nodes)
 
     def _replay(self, starter_key: str) -> list[SampleRecord]:
-        """Rebuild the database and counters from the store of an earlier run; the samples it
-        left pending or interrupted, to evaluate first."""
-        batch, to_evaluate, registered = None, [], {starter_key}
-        for record in self.store.records():
-            if record.sample == STARTER_SAMPLE:
-                continue
-            if batch is not None and record.batch != batch:
-                self.database.on_sample(self.counters.samples)
-            batch = record.batch
-            if record.status in TO_EVALUATE_AGAIN:
-                to_evaluate.append(record)
-            elif record.status == EVALUATED and record.key in registered:
-                self.counters.count(record)  # one structure under today's keys, evaluated twice by an older colmo: the first stays
-            else:
-                self._apply(record)
-            if record.status == EVALUATED:
-                registered.add(record.key)
-            self.next_sample, self.next_batch = record.sample + 1, record.batch + 1
-        if batch is not None:
-            self.database.on_sample(self.counters.samples)
+        """Rebuild the ledger from the store of an earlier run; the samples it left pending or
+        interrupted, to evaluate first."""
+        replayed = self.ledger.replay((r for r in self.store.records() if r.sample != STARTER_SAMPLE), starter_key)
+        self.next_sample, self.next_batch = replayed.next_sample, replayed.next_batch
         self.resumed_samples = self.counters.samples
-        if self.counters.samples or to_evaluate:
-            log.info("resumed %s: %d samples, best %.2f, %d to evaluate again", self.run_dir, self.counters.samples, self.database.best.score, len(to_evaluate))
-        return to_evaluate
+        if self.counters.samples or replayed.to_evaluate:
+            log.info(
+                "resumed %s: %d samples, best %.2f, %d to evaluate again",
+                self.run_dir, self.counters.samples, self.database.best.score, len(replayed.to_evaluate),
+            )
+        return replayed.to_evaluate
 
     # -- generation ------------------------------------------------------------------------------
 
@@ -316,9 +302,9 @@ class Search:
             self._stop_requested()  # the deadline stops the programs in flight at their next candidate
         records = [outcome.result() for outcome in batch.outcomes]  # stored; an exception here is a bug or a full disk
         for record in records:
-            self._apply(record)
+            self.ledger.settle(record)
         self.in_flight_samples -= sum(record.model_calls for record in records)
-        reset = self.database.on_sample(self.counters.samples)
+        reset = self.ledger.end_batch()
         if reset:
             log.info("reset islands %s", reset)
         report = self._report(batch)
@@ -332,20 +318,6 @@ class Search:
         )
         for observer in self.observers:
             observer.on_batch(report, records)
-
-    def _apply(self, record: SampleRecord) -> None:
-        """Count one settled sample and register it in the database, in sample order."""
-        island_best = (
-            record.status == EVALUATED and record.score is not None and record.score > self.database.best_per_island[record.island]
-        )
-        self.counters.count(record, island_best)
-        if record.status == EVALUATED:
-            before = self.database.best.score
-            self.database.register(StoredProgram(record.key, record.code, record.score, record.island, record.sample, record.nodes, record.coverage))
-            if self.database.best.score > before:
-                self.best_so_far.append((self.counters.samples, self.database.best.score))
-        elif record.key and record.status != INTERRUPTED:
-            self.database.mark_seen(record.key)
 
     # -- stopping ---------------------------------------------------------------------------------
 
