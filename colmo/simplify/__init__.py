@@ -9,7 +9,8 @@ making it worse, and measures every step:
   literal arithmetic with trusted functions; it never runs the program.
 - `candidates`: `deletion_candidates`, every one-step deletion of a program (a statement, a
   branch, a term, a factor, a wrapping call, a subexpression replaced by 0 or 1); with `merge`,
-  two terms alike but for their constants written as one (mutation's blend of relatives).
+  two terms alike but for their constants written as one (mutation's blend of relatives); with
+  `linear`, a sum's like terms collected and its numbers added.
 - `greedy`: `simplify`, the algorithm and its acceptance rule, with the scoring and re-tuning
   injected; every score it reports is measured.
 - `sandboxed`: `simplify_program`, the algorithm for a task: the referee scores programs in

@@ -8,7 +8,8 @@ to one of its arguments (`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), keep o
 `and`/`or`, merge two terms alike but for their constants and at most one subexpression
 (`0.5 * a + 0.5 * a_b`, where `a` and `a_b` are assigned such expressions, as mutation's blend
 of a program and its relative writes: one expression, each constant the weighted mean of the
-pair, the subexpression that differs the weighted sum of the two), and replace a subexpression
+pair, the subexpression that differs the weighted sum of the two), collect a sum's like terms
+(`a + 1.663 * (0.3931 - b + 1.142 * b)` -> `a + 0.6537 + 0.2361 * b`, `colmo.simplify.linear`), and replace a subexpression
 that no drop covers (a call argument, a compared value, an assigned or returned value, a branch)
 by 0.0 or 1.0. The last `return` of the policy is never deleted (a policy returning None always
 fails). Each candidate is cleaned by `remove_dead_code`, so what a deletion leaves dead goes
@@ -28,6 +29,7 @@ from colmo import astutil
 from colmo.astutil import OPAQUE_FIELDS, is_number_literal, node_count, number_literal, strip_docstrings
 from colmo.program import round_significant
 from colmo.simplify.deadcode import FUNCTIONS, own_statements, remove_dead_code
+from colmo.simplify.linear import collected_sum, top_of_sum
 from colmo.simplify.merge import merged_terms, single_definitions
 
 
@@ -144,6 +146,10 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
             if merged is not None:
                 yield node, f"merged the alike terms of `{_short(node)}` into one at {where}", replace_with(
                     lambda n, merged=merged: copy.deepcopy(merged)
+                )
+            if top_of_sum(node, parents[id(node)][0]) and (collected := collected_sum(node)) is not None:
+                yield node, f"collected the like terms of `{_short(node)}` at {where}", replace_with(
+                    lambda n, collected=collected: copy.deepcopy(collected)
                 )
         elif isinstance(node, ast.BoolOp):
             for i, value in enumerate(node.values):

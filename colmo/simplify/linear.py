@@ -1,0 +1,96 @@
+"""Collecting a sum's like terms: the simplifier's candidate for sums that mutation grew term by term.
+
+Mutation writes sums such as `a + 1.663 * (0.3931 - b + 1.142 * b)`: the same subexpression
+twice with different constants, and a constant factor over a sum. `collected_sum` reads a sum of
+terms, each a subexpression times a number (`c * e`, `e * c`, `e / c`, `-e`, or a number alone),
+through the constant factors over it, and writes it with each subexpression once, its
+coefficients added, the numbers added into one: `a + 0.6537 + 0.2361 * b`. Exact but for the
+constants' rounding to what a person reads; a subexpression that is not a number (a list's `+`
+concatenates) or that differs from call to call would make it wrong, so, like every candidate,
+it is scored before it is kept.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+from typing import Optional
+
+from colmo.astutil import is_number_literal, node_count, number_literal
+from colmo.program import round_significant
+
+_Terms = dict[str, tuple[float, Optional[ast.expr]]]  # by `ast.dump` of the subexpression ("" for the number)
+
+
+def _number(node: ast.expr) -> Optional[float]:
+    if not is_number_literal(node):
+        return None
+    value = ast.literal_eval(node)
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
+
+
+def _add_terms(node: ast.expr, scale: float, terms: _Terms) -> int:
+    """Add `scale * node`'s terms to `terms`; the number of terms and constant factors read."""
+    if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub)):
+        return _add_terms(node.left, scale, terms) + _add_terms(node.right, -scale if isinstance(node.op, ast.Sub) else scale, terms)
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        return _add_terms(node.operand, -scale if isinstance(node.op, ast.USub) else scale, terms)
+    if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Mult, ast.Div)):
+        right = _number(node.right)
+        left = _number(node.left) if isinstance(node.op, ast.Mult) else None
+        if right is not None and (right != 0 or isinstance(node.op, ast.Mult)):
+            return 1 + _add_terms(node.left, scale * right if isinstance(node.op, ast.Mult) else scale / right, terms)
+        if left is not None:
+            return 1 + _add_terms(node.right, scale * left, terms)
+    value = _number(node)
+    key = "" if value is not None else ast.dump(node)
+    coefficient, expression = terms.get(key, (0.0, None if value is not None else node))
+    terms[key] = (coefficient + (scale * value if value is not None else scale), expression)
+    return 1
+
+
+def _term(coefficient: float, expression: Optional[ast.expr]) -> ast.expr:
+    """`|coefficient| * expression` (the sign goes to the sum), or the number alone."""
+    magnitude = number_literal(round_significant((abs(coefficient),))[0])
+    if expression is None:
+        return magnitude
+    return expression if math.isclose(abs(coefficient), 1.0) else ast.BinOp(magnitude, ast.Mult(), expression)
+
+
+def collected_sum(node: ast.expr) -> Optional[ast.expr]:
+    """`node`, a sum or a constant times one, with its like terms collected and its constants
+    added (see the module docstring); None unless that is smaller (`node_count`) and finite."""
+    if not isinstance(node, ast.BinOp) or not isinstance(node.op, (ast.Add, ast.Sub, ast.Mult, ast.Div)):
+        return None
+    terms: _Terms = {}
+    read = _add_terms(node, 1.0, terms)
+    if len(terms) == read or not all(math.isfinite(coefficient) for coefficient, _ in terms.values()):
+        return None  # every term and factor stays as it was
+    kept = [(coefficient, expression) for coefficient, expression in terms.values() if round_significant((coefficient,))[0] != 0.0]
+    if not kept:
+        return number_literal(0.0)
+    (coefficient, expression), *rest = kept
+    total = _term(coefficient, expression)
+    if coefficient < 0:  # the sign on the leading number: `-0.3 * x`, not `-(0.3 * x)`
+        if is_number_literal(total):
+            total = number_literal(-ast.literal_eval(total))
+        elif total is not expression:  # `|coefficient| * expression`
+            total = ast.BinOp(number_literal(-ast.literal_eval(total.left)), ast.Mult(), total.right)
+        else:
+            total = ast.UnaryOp(ast.USub(), total)
+    for coefficient, expression in rest:
+        total = ast.BinOp(total, ast.Add() if coefficient > 0 else ast.Sub(), _term(coefficient, expression))
+    return total if node_count(total) < node_count(node) else None
+
+
+def top_of_sum(node: ast.AST, parent: ast.AST) -> bool:
+    """Whether `node` is a sum or a constant times one that is no term of a larger such sum, the
+    place `collected_sum` is offered (inner parts of a sum would offer what the whole collects)."""
+    if not isinstance(node, ast.BinOp) or not isinstance(node.op, (ast.Add, ast.Sub, ast.Mult, ast.Div)):
+        return False
+    if isinstance(parent, ast.BinOp) and isinstance(parent.op, (ast.Add, ast.Sub)):
+        return False
+    if isinstance(parent, ast.UnaryOp) and isinstance(parent.op, (ast.USub, ast.UAdd)):
+        return False
+    scaled = isinstance(parent, ast.BinOp) and isinstance(parent.op, (ast.Mult, ast.Div))
+    return not (scaled and _number(parent.right if parent.left is node else parent.left) is not None)
