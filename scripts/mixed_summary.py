@@ -32,7 +32,7 @@ def _generator(name: str, entry: dict, seconds: float) -> str:
     time it spent generating, where that is more than 5%."""
     parts = [f"{entry['programs_evaluated']} evaluated", f"best {_score(entry['best_score'])}"]
     if "island_bests" in entry:
-        parts.append(f"{entry['island_bests']} island bests")
+        parts.append(f"{entry['island_bests']} island best{'' if entry['island_bests'] == 1 else 's'}")
         if entry["generation_seconds"] > 0.05 * seconds:
             parts.append(f"calling {entry['generation_seconds'] / seconds:.0%} of the time")
     return f"{name} {entry['samples']} ({', '.join(parts)})"

@@ -65,4 +65,4 @@ def test_a_run_that_recorded_island_bests_shows_them_and_the_models_time_calling
     }
     summary_path.write_text(json.dumps(summary))
     text = subprocess.run([sys.executable, str(SCRIPT), str(tmp_path)], capture_output=True, text=True, check=True).stdout
-    assert "mutate 400 (390 evaluated, best 800.0, 80 island bests), llamacpp 12 (5 evaluated, best 500.0, 1 island bests, calling 20% of the time)" in text
+    assert "mutate 400 (390 evaluated, best 800.0, 80 island bests), llamacpp 12 (5 evaluated, best 500.0, 1 island best, calling 20% of the time)" in text
