@@ -384,9 +384,10 @@ def _collected(code: str) -> list[Candidate]:
 def test_a_sums_like_terms_are_collected_and_its_numbers_added_by_a_measured_candidate():
     # The cheetah's by_yield seed-0 winner after simplification ended in this sum (17 constants).
     code = "def policy(obs):\n    action = 2.0 * obs[1]\n    action_b = obs[2]\n    return action + 1.663 * (0.3931 - action_b + 1.142 * action_b)"
-    (collected,) = _collected(code)
+    collected, written_in = _collected(code)
     assert collected.code.endswith("return action + 0.6537 + 0.2361 * action_b")  # 1.663 * 0.3931 and 1.663 * 0.142
     assert collected.description == "collected the like terms of `action + 1.663 * (0.3931 - action_b + 1.142 * action_b)` at line 4"
+    assert written_in.code.endswith("return 2.0 * obs[1] + 0.6537 + 0.2361 * action_b")  # `action`, read once, written in
     for before, after in (
         ("-(0.5 * obs[0]) + 0.2 * obs[0] + 1", "-0.3 * obs[0] + 1.0"),
         ("obs[0] / 2.0 + obs[0] / 4.0 - obs[1]", "0.75 * obs[0] - obs[1]"),
@@ -405,6 +406,24 @@ def test_like_terms_are_collected_once_for_the_whole_sum_not_for_each_part():
     code = "def policy(obs):\n    return obs[0] + 0.5 * obs[1] + 2.0 * (obs[0] - obs[1]) + obs[2]"
     (collected,) = _collected(code)
     assert collected.code.endswith("return 3.0 * obs[0] - 1.5 * obs[1] + obs[2]")
+
+
+def test_names_assigned_once_and_read_only_in_a_sum_are_written_in_where_that_collects_terms():
+    # The pendulum's by_yield seed-1 winner after simplification kept `action = 0.1671` for one read.
+    code = "def policy(obs):\n    action = 0.1671\n    b = obs[2]\n    return action - 11.97 * (obs[1] - b * b) + 0.3294"
+    assert [(c.description, c.code) for c in _collected(code)] == [(
+        "collected the like terms of `action - 11.97 * (obs[1] - b * b) + 0.3294` with `action` written in at line 4",
+        "def policy(obs):\n    b = obs[2]\n    return 0.4965 - 11.97 * (obs[1] - b * b)",  # `b`, read twice, stays
+    )]
+    blend = "def policy(obs):\n    a = 2.0 * obs[0] + obs[1]\n    a_b = obs[0] - 0.5 * obs[1]\n    return a + 1.5 * a_b"
+    (collected,) = _collected(blend)
+    assert collected.code == "def policy(obs):\n    return 3.5 * obs[0] + 0.25 * obs[1]"
+    for kept in (
+        "def policy(obs):\n    a = obs[0]\n    a = a * 2.0\n    return a + 1.0 + a",  # assigned twice
+        "def policy(obs):\n    obs = obs * 2.0\n    a = 1.0\n    return a + obs[0] + 1.0 + a",  # read twice
+        "def policy(obs):\n    a = np.tanh(obs[0])\n    return a + 2.0 * obs[1]",  # nothing to collect
+    ):
+        assert not _collected(kept), kept
 
 
 # The A1's seed-2 winner of docs/locomotion-search.md, shortened: mutation's blend of two related

@@ -9,7 +9,9 @@ to one of its arguments (`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), keep o
 (`0.5 * a + 0.5 * a_b`, where `a` and `a_b` are assigned such expressions, as mutation's blend
 of a program and its relative writes: one expression, each constant the weighted mean of the
 pair, the subexpression that differs the weighted sum of the two), collect a sum's like terms
-(`a + 1.663 * (0.3931 - b + 1.142 * b)` -> `a + 0.6537 + 0.2361 * b`, `colmo.simplify.linear`), and replace a subexpression
+(`a + 1.663 * (0.3931 - b + 1.142 * b)` -> `a + 0.6537 + 0.2361 * b`, `colmo.simplify.linear`), the
+same with the names assigned once and read only in that sum written in (`a = 0.17` then
+`return a - 2.0 * x + 0.33` -> `return 0.5 - 2.0 * x`), and replace a subexpression
 that no drop covers (a call argument, a compared value, an assigned or returned value, a branch)
 by 0.0 or 1.0. The last `return` of the policy is never deleted (a policy returning None always
 fails). Each candidate is cleaned by `remove_dead_code`, so what a deletion leaves dead goes
@@ -22,6 +24,7 @@ from __future__ import annotations
 import ast
 import copy
 import math
+from collections import Counter
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Optional
 
@@ -111,9 +114,12 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
 
     functions = [n for n in ast.walk(tree) if isinstance(n, FUNCTIONS)]
     definitions: dict[int, dict[str, ast.expr]] = {}  # each node's function's `single_definitions`
+    reads: dict[int, Counter[str]] = {}  # each node's function's reads of each name (its nested functions' included)
     for function in functions:  # in walk order: a nested function's nodes end with its own
         single = single_definitions(function)
+        read = Counter(n.id for n in ast.walk(function) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load))
         definitions.update((id(n), single) for n in ast.walk(function))
+        reads.update((id(n), read) for n in ast.walk(function))
     for function in functions:
         # Without its last statement, a `return`, the policy returns None: always a failure.
         final_return = function.body[-1] if function.name == function_name and isinstance(function.body[-1], ast.Return) else None
@@ -128,6 +134,7 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
                     yield statement, f"kept only the else branch of `if {test}` at {where}", splice(lambda s: s.orelse)
     for node in _value_positions(tree):
         where = f"line {node.lineno}"
+        single = definitions.get(id(node), {})
         if isinstance(node, ast.IfExp):
             test = _short(node.test, 40)
             yield node, f"kept only the if-side of `... if {test} else ...` at {where}", replace_with(lambda n: n.body)
@@ -142,15 +149,23 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
                     yield node, f"dropped the {word} `{_short(dropped)}` at {where}", replace_with(lambda n, side=side: getattr(n, side))
             if _merged_factors(node) is not None:
                 yield node, f"merged the constant factors of `{_short(node)}` at {where}", replace_with(_merged_factors)
-            merged = merged_terms(node, definitions.get(id(node), {}))
+            merged = merged_terms(node, single)
             if merged is not None:
                 yield node, f"merged the alike terms of `{_short(node)}` into one at {where}", replace_with(
                     lambda n, merged=merged: copy.deepcopy(merged)
                 )
-            if top_of_sum(node, parents[id(node)][0]) and (collected := collected_sum(node)) is not None:
-                yield node, f"collected the like terms of `{_short(node)}` at {where}", replace_with(
-                    lambda n, collected=collected: copy.deepcopy(collected)
-                )
+            if top_of_sum(node, parents[id(node)][0]):
+                if (collected := collected_sum(node)) is not None:
+                    yield node, f"collected the like terms of `{_short(node)}` at {where}", replace_with(
+                        lambda n, collected=collected: copy.deepcopy(collected)
+                    )
+                # A name assigned once and read only here, written in, may have terms to collect.
+                read_once = {name: single[name] for name in _names_read(node) if name in single and reads[id(node)][name] == 1}
+                if read_once and (collected := collected_sum(_written_in(node, read_once))) is not None:
+                    names = ", ".join(f"`{name}`" for name in read_once)
+                    yield node, f"collected the like terms of `{_short(node)}` with {names} written in at {where}", replace_with(
+                        lambda n, collected=collected: copy.deepcopy(collected)
+                    )
         elif isinstance(node, ast.BoolOp):
             for i, value in enumerate(node.values):
                 yield node, f"kept only `{_short(value)}` of `{_short(node, 40)}` at {where}", replace_with(lambda n, i=i: n.values[i])
@@ -169,6 +184,20 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
         if not covered and not is_number_literal(node) and not isinstance(node, ast.Constant):
             for value in (0.0, 1.0):
                 yield node, f"replaced `{_short(node)}` by {value} at {where}", replace_with(lambda n, value=value: ast.Constant(value))
+
+
+def _names_read(node: ast.AST) -> list[str]:
+    return list(dict.fromkeys(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)))
+
+
+def _written_in(node: ast.expr, values: dict[str, ast.expr]) -> ast.expr:
+    """A copy of `node` with each name of `values` read in it replaced by (a copy of) its value."""
+
+    class WriteIn(ast.NodeTransformer):
+        def visit_Name(self, name: ast.Name) -> ast.expr:
+            return copy.deepcopy(values[name.id]) if name.id in values and isinstance(name.ctx, ast.Load) else name
+
+    return WriteIn().visit(copy.deepcopy(node))
 
 
 def _inverted_clip(node: ast.Call) -> Optional[tuple[float, float]]:
