@@ -161,6 +161,20 @@ def replace_nodes(tree: ast.AST, replacements: Mapping[int, ast.AST]) -> ast.AST
     return _Replace(replacements).visit(tree)
 
 
+def names_read(node: ast.AST) -> list[str]:
+    """The names `node` reads (loads), each once, in walk order."""
+    return list(dict.fromkeys(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)))
+
+
+def negated(node: ast.expr) -> ast.expr:
+    """`-node`, with the sign on a leading literal factor: `-(0.3 * x)` is `-0.3 * x`, exactly."""
+    if is_number_literal(node):
+        return number_literal(-ast.literal_eval(node))
+    if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Mult, ast.Div)) and is_number_literal(node.left):
+        return ast.BinOp(negated(node.left), node.op, node.right)
+    return ast.UnaryOp(ast.USub(), node)
+
+
 def is_number_literal(node: ast.AST) -> bool:
     """An int or float literal, possibly signed: `-3.2` is one literal (one tunable constant),
     not an operator applied to one. Booleans are not numbers here."""

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Optional
 
 from colmo import astutil
-from colmo.astutil import OPAQUE_FIELDS, is_number_literal, node_count, number_literal, strip_docstrings
+from colmo.astutil import OPAQUE_FIELDS, is_number_literal, names_read, negated, node_count, number_literal, replace_nodes, strip_docstrings
 from colmo.program import round_significant
 from colmo.simplify.deadcode import FUNCTIONS, own_statements, remove_dead_code
 from colmo.simplify.linear import collected_sum, top_of_sum
@@ -144,7 +144,7 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
             for side in _DROP_SIDES[type(node.op)]:
                 kept, dropped = (node.left, node.right) if side == "left" else (node.right, node.left)
                 if side == "right" and isinstance(node.op, ast.Sub):
-                    yield node, f"dropped the term `{_short(dropped)}` at {where}", replace_with(lambda n: _negated(n.right))
+                    yield node, f"dropped the term `{_short(dropped)}` at {where}", replace_with(lambda n: negated(n.right))
                 else:
                     yield node, f"dropped the {word} `{_short(dropped)}` at {where}", replace_with(lambda n, side=side: getattr(n, side))
             if _merged_factors(node) is not None:
@@ -160,7 +160,7 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
                         lambda n, collected=collected: copy.deepcopy(collected)
                     )
                 # A name assigned once and read only here, written in, may have terms to collect.
-                read_once = {name: single[name] for name in _names_read(node) if name in single and reads[id(node)][name] == 1}
+                read_once = {name: single[name] for name in names_read(node) if name in single and reads[id(node)][name] == 1}
                 if read_once and (collected := collected_sum(_written_in(node, read_once))) is not None:
                     names = ", ".join(f"`{name}`" for name in read_once)
                     yield node, f"collected the like terms of `{_short(node)}` with {names} written in at {where}", replace_with(
@@ -186,18 +186,11 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
                 yield node, f"replaced `{_short(node)}` by {value} at {where}", replace_with(lambda n, value=value: ast.Constant(value))
 
 
-def _names_read(node: ast.AST) -> list[str]:
-    return list(dict.fromkeys(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)))
-
-
 def _written_in(node: ast.expr, values: dict[str, ast.expr]) -> ast.expr:
     """A copy of `node` with each name of `values` read in it replaced by (a copy of) its value."""
-
-    class WriteIn(ast.NodeTransformer):
-        def visit_Name(self, name: ast.Name) -> ast.expr:
-            return copy.deepcopy(values[name.id]) if name.id in values and isinstance(name.ctx, ast.Load) else name
-
-    return WriteIn().visit(copy.deepcopy(node))
+    copied = copy.deepcopy(node)
+    reads = [n for n in ast.walk(copied) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load) and n.id in values]
+    return replace_nodes(copied, {id(n): copy.deepcopy(values[n.id]) for n in reads})
 
 
 def _inverted_clip(node: ast.Call) -> Optional[tuple[float, float]]:
@@ -248,15 +241,6 @@ def _merged_factors(node: ast.AST) -> Optional[ast.expr]:
                 if (merged := _merged_literal(value, inner)) is not None:  # the factors stay in their order
                     return ast.BinOp(merged, ast.Mult(), rest) if first else ast.BinOp(rest, ast.Mult(), merged)
     return None
-
-
-def _negated(node: ast.expr) -> ast.expr:
-    """`-node`, with the sign on a leading literal factor: `-(0.3 * x)` is `-0.3 * x`, exactly."""
-    if is_number_literal(node):
-        return number_literal(-ast.literal_eval(node))
-    if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Mult, ast.Div)) and is_number_literal(node.left):
-        return ast.BinOp(_negated(node.left), node.op, node.right)
-    return ast.UnaryOp(ast.USub(), node)
 
 
 def deletion_candidates(code: str, function_name: str = "policy", stop: Callable[[], bool] = lambda: False) -> list[Candidate]:

@@ -17,7 +17,7 @@ import ast
 import math
 from typing import Optional
 
-from colmo.astutil import is_number_literal, node_count, number_literal
+from colmo.astutil import is_number_literal, negated, node_count, number_literal
 from colmo.program import round_significant
 
 _Terms = dict[str, tuple[float, Optional[ast.expr]]]  # by `ast.dump` of the subexpression ("" for the number)
@@ -94,13 +94,8 @@ def _sum_of(terms: list[tuple[float, Optional[ast.expr]]]) -> ast.expr:
         return number_literal(0.0)
     (coefficient, expression), *rest = terms
     total = _term(coefficient, expression)
-    if coefficient < 0:  # the sign on the leading number: `-0.3 * x`, not `-(0.3 * x)`
-        if is_number_literal(total):
-            total = number_literal(-ast.literal_eval(total))
-        elif total is not expression:  # `|coefficient| * expression`
-            total = ast.BinOp(number_literal(-ast.literal_eval(total.left)), ast.Mult(), total.right)
-        else:
-            total = ast.UnaryOp(ast.USub(), total)
+    if coefficient < 0:
+        total = negated(total)
     for coefficient, expression in rest:
         total = ast.BinOp(total, ast.Add() if coefficient > 0 else ast.Sub(), _term(coefficient, expression))
     return total
