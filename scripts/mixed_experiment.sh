@@ -8,8 +8,8 @@
 # Seed 0 of every variant first, then seeds 1 and 2. Each run is a one-job sweep into its own
 # directory, so running this again keeps what finished and resumes the rest.
 #
-#   [VARIANTS="by_yield mutate"] scripts/mixed_experiment.sh OUT [TASK ...]
-#                          (default: every variant; tasks: pendulum cheetah)
+#   [VARIANTS="by_yield mutate"] [SEEDS="2"] scripts/mixed_experiment.sh OUT [TASK ...]
+#                          (default: every variant, seeds 0 1 2; tasks: pendulum cheetah)
 #   python scripts/mixed_summary.py OUT               the table of what has finished
 set -u
 out=$(mkdir -p "$1" && cd "$1" && pwd); shift
@@ -23,7 +23,7 @@ run() {  # task variant seed overrides...
   colmo -m "task=$task" "seed=$seed" search.max_seconds=1800 search.max_samples=1000000 search.progress=false \
     "hydra.sweep.dir=$task/$variant/s$seed" "$@" || echo "run $task $variant s$seed exited $?"
 }
-for seed in 0 1 2; do
+for seed in ${SEEDS:-0 1 2}; do
   for task in $tasks; do
     run "$task" mixed "$seed" llm=llamacpp "llm.model_path=$model" search.fill=mutate
     run "$task" mutate "$seed" llm=mutate
