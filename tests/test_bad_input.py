@@ -5,6 +5,8 @@ in process (`colmo.cli.App.check_command_line`), what the command prints and exi
 tests/test_cli.py.
 """
 
+import sys
+
 import pytest
 from conftest import refused, run_colmo
 
@@ -46,3 +48,19 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, monkeypatch, overrides, mess
 def test_verbose_shows_the_traceback(tmp_path):
     result = run_colmo("colmo", "gfo.budget=0", "tracker=none", "hydra.verbose=true", cwd=tmp_path)
     assert result.returncode != 0 and "Traceback" in result.stderr
+
+
+@pytest.mark.parametrize("llm, module, message", [
+    ("llamacpp", "llama_cpp", "llm=llamacpp needs llama-cpp-python: pip install 'colmo[llamacpp]'"),
+    ("vllm", "vllm", "llm=vllm needs vLLM: pip install 'colmo[vllm]'"),
+])
+def test_a_generator_whose_library_is_not_installed(tmp_path, monkeypatch, llm, module, message):
+    # Found missing before anything is made: no output directory, no MLflow store.
+    model = tmp_path / "model.gguf"
+    model.write_bytes(b"GGUF")
+    monkeypatch.setitem(sys.modules, module, None)  # as if not installed
+    monkeypatch.chdir(tmp_path)
+    options = [f"llm.model_path={model}"] if llm == "llamacpp" else []
+    code, line = refused(colmo, f"llm={llm}", *options)
+    assert (code, line) == (2, f"colmo: error: {message}")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["model.gguf"]

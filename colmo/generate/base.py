@@ -13,10 +13,12 @@ import abc
 import dataclasses
 import enum
 import importlib
+import importlib.util
 import logging
 import random
+import sys
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, ClassVar, Optional, Sequence
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, NamedTuple, Optional, Sequence
 
 from colmo.config import GeneratorConfig
 from colmo.errors import one_line
@@ -94,6 +96,18 @@ class GeneratorError(RuntimeError):
 Probe = Callable[[str], bool]
 
 
+class Library(NamedTuple):
+    """An optional library a generator runs on: the module it imports, the package's name, and
+    what `pip install` takes to install it (for colmo's own generators, the extra of their name)."""
+
+    module: str
+    package: str
+    requirement: str
+
+    def missing(self, llm: str) -> str:
+        return f"llm={llm} needs {self.package}: pip install '{self.requirement}'"
+
+
 class Generator(abc.ABC):
     """Turns prompts into raw texts. Subclasses register under their `llm.name` with
     `@GENERATORS.register` and are built as `cls(cfg, seed, probe)`; `probe` is None unless
@@ -101,6 +115,7 @@ class Generator(abc.ABC):
 
     options: ClassVar[type[GeneratorConfig]]  # the schema of its `llm` option
     wants_probe: ClassVar[bool] = False
+    library: ClassVar[Optional[Library]] = None  # the optional library it runs on
     # Whether an answer that brings no new program is answered in the same conversation, the
     # model told what was wrong (`colmo.answers.regenerate`): a chat model's, with `llm.follow_up`.
     follows_up: bool = False
@@ -155,13 +170,29 @@ class LanguageModelGenerator(Generator):
         return prompt.shown_code if self.chat else prompt.text
 
 
-def import_library(module: str, package: str, llm: str) -> Any:
-    """The optional library `llm=<llm>` runs on; `GeneratorError` saying how to install it (the
-    extra of colmo named like the generator)."""
+def import_library(llm: str) -> Any:
+    """The optional library `llm=<llm>` runs on (`Generator.library`); `GeneratorError` saying
+    how to install it."""
+    library = GENERATORS.chosen(llm).library
     try:
-        return importlib.import_module(module)
+        return importlib.import_module(library.module)
     except ImportError:
-        raise GeneratorError(f"llm={llm} needs {package}: pip install 'colmo[{llm}]'") from None
+        raise GeneratorError(library.missing(llm)) from None
+
+
+def check_library(llm: str) -> None:
+    """`GeneratorError` unless the optional library `llm=<llm>` runs on, if any, is installed:
+    found, not imported (vLLM's import takes seconds), so that a run can check it before it
+    makes anything."""
+    library = GENERATORS.chosen(llm).library
+    if library is not None and not _installed(library.module):
+        raise GeneratorError(library.missing(llm))
+
+
+def _installed(module: str) -> bool:
+    if module in sys.modules:  # imported already, or stood in for (None: hidden)
+        return sys.modules[module] is not None
+    return importlib.util.find_spec(module) is not None
 
 
 GENERATORS: Registry[type[Generator]] = Registry("llm.name")

@@ -12,7 +12,7 @@ import time
 from typing import Optional
 
 from colmo.config import VLLMConfig
-from colmo.generate.base import GENERATORS, Generation, GeneratorError, LanguageModelGenerator, Probe, batch_of, describe_error, import_library, logger
+from colmo.generate.base import GENERATORS, Generation, GeneratorError, LanguageModelGenerator, Library, Probe, batch_of, describe_error, import_library, logger
 from colmo.prompt import COMPLETION_STOP, Prompt
 
 
@@ -21,10 +21,11 @@ class VLLMGenerator(LanguageModelGenerator):
     """`vllm.LLM` in this process; the batch is the `n` outputs of one request."""
 
     options = VLLMConfig
+    library = Library("vllm", "vLLM", "colmo[vllm]")
 
     def __init__(self, cfg: VLLMConfig, seed: int, probe: Optional[Probe] = None):
         super().__init__(cfg, seed, probe)
-        vllm = import_library("vllm", "vLLM", "vllm")
+        vllm = import_library("vllm")
         self.name = f"vllm:{cfg.model}"
         self._sampling_params = vllm.SamplingParams
         try:
