@@ -13,25 +13,19 @@ from hydra.core.hydra_config import HydraConfig
 
 from colmo.cli import hydra_app
 from colmo.config import OpenAIConfig, SearchConfig
-from colmo.errors import ConfigError, RunError
+from colmo.errors import RunError
 from colmo.shell import shell_override
 from colmo.trackers import make_tracker
 
 
 def check_inputs(cfg: SearchConfig) -> None:
-    """The spec file loads, `resume=` names a run made with the same scoring settings, the
-    generator's library is installed, and with `llm=openai` a server answers: all before any
-    output directory, MLflow run or sandbox exists. (Imports here, not above: shell completion
-    imports this module on every Tab.)"""
-    from colmo.generate import GeneratorError, check_library
+    """The spec file loads, `resume=` names a run made with the same scoring settings, and with
+    `llm=openai` a server answers: all before any output directory, MLflow run or sandbox exists.
+    (Imports here, not above: shell completion imports this module on every Tab.)"""
     from colmo.specs import load_task_spec
     from colmo.store import open_for_resume, run_settings
 
     load_task_spec(cfg.task.spec)
-    try:
-        check_library(cfg.llm.name)
-    except GeneratorError as error:
-        raise ConfigError(str(error)) from None
     if cfg.resume:
         open_for_resume(Path(cfg.resume).expanduser(), run_settings(cfg))
     if isinstance(cfg.llm, OpenAIConfig):

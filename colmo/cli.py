@@ -3,7 +3,8 @@
 `hydra_app(config_name, check)` wraps `hydra.main` over colmo's bundled configs. Before Hydra
 starts, the command line is read with Hydra's own argument parser and the config of every job
 of a sweep is composed and validated (every value of a choice or range sweep, both ends of a
-sweeper's interval; `check` vets the files it names), so anything a user can get wrong ends in
+sweeper's interval; the components it names have their optional libraries installed; `check` vets
+the files it names), so anything a user can get wrong ends in
 one line on stderr (`colmo: error: ...`) and exit code 2 whatever Hydra flag is used
 (`--cfg job task=nope` too), and leaves no output directory (an app's `check_command_line(argv)`
 runs these checks alone, in process). A `ConfigError` or `RunError` during the run ends in one
@@ -35,6 +36,7 @@ import hydra
 from omegaconf import DictConfig, OmegaConf, open_dict
 
 from colmo.components import register_schemas, schema_names
+from colmo.config.fields import check_libraries
 from colmo.config.schemas import CONFIG_MODULE
 from colmo.errors import EXIT_INTERRUPTED, EXIT_RUNTIME, EXIT_USAGE, ConfigError, RunError, one_line
 
@@ -202,7 +204,10 @@ def hydra_app(
                 return
             for variant in _sweep_variants(_overrides(args), multirun=bool(args.multirun)):
                 cfg = compose(config_name, variant, output_dir=None if args.cfg or args.info else args.multirun)
-                if check is not None and not (args.cfg or args.info):
+                if args.cfg or args.info:
+                    continue
+                check_libraries(cfg)
+                if check is not None:
                     check(cfg)
 
         def main() -> None:

@@ -8,18 +8,41 @@ and typed fields), a name is checked against the registered ones before Hydra st
 messages and help list the names from the registry itself. Each component says which option
 schema it needs (`options`, a class of `colmo.config`), so an option file that sets a name its
 schema does not fit ends in one line too. A name is registered once: a second component under
-a taken name is refused. `colmo.components` loads every registry, with the components of
+a taken name is refused. A component that runs on an optional library names it (`library`, a
+`Library`), so that a command can check it is installed before it makes anything
+(`Registry.check_installed`). `colmo.components` loads every registry, with the components of
 installed packages, and builds Hydra's schema table from them.
 """
 
 from __future__ import annotations
 
+import importlib.util
+import sys
 from collections.abc import Iterator, Mapping
-from typing import Any, Callable, Generic, TypeVar
+from typing import Any, Callable, Generic, NamedTuple, TypeVar
 
 from colmo.errors import ConfigError
 
 T = TypeVar("T")
+
+
+class Library(NamedTuple):
+    """An optional library a component runs on: the module it imports, the package's name, and
+    what `pip install` takes to install it (for colmo's own components, the extra of their name)."""
+
+    module: str
+    package: str
+    requirement: str
+
+    def installed(self) -> bool:
+        """Whether the module can be imported: found, not imported (vLLM's import takes seconds)."""
+        if self.module in sys.modules:  # imported already, or stood in for (None: hidden)
+            return sys.modules[self.module] is not None
+        return importlib.util.find_spec(self.module) is not None
+
+    def missing(self, option: str) -> str:
+        """The one line for `option` (`llm=vllm`) chosen without the library."""
+        return f"{option} needs {self.package}: pip install '{self.requirement}'"
 
 
 class Registry(Mapping[str, T], Generic[T]):
@@ -69,6 +92,14 @@ class Registry(Mapping[str, T], Generic[T]):
         component: Any = self.chosen(name)
         if not isinstance(options, component.options):
             raise ConfigError(f"{self.key}={name} needs the {name} options: use {self.group}={name}")
+
+
+    def check_installed(self, name: str) -> None:
+        """`ConfigError` unless the optional library the component `name` runs on (its `library`),
+        if it has one, is installed."""
+        library = getattr(self.chosen(name), "library", None)
+        if library is not None and not library.installed():
+            raise ConfigError(library.missing(f"{self.group}={name}"))
 
 
 def _qualified(component: Any) -> str:

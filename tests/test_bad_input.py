@@ -8,9 +8,10 @@ tests/test_cli.py.
 import sys
 
 import pytest
-from conftest import refused, run_colmo
+from conftest import EXAMPLES, refused, run_colmo
 
 from colmo.__main__ import main as colmo
+from colmo.optimize.__main__ import main as optimize
 
 SPEC_WITH_SYNTAX_ERROR = '"""A task."""\ndef make_environment(:\n'
 SPEC_WITHOUT_POLICY = '"""A task."""\nfrom colmo.environments.pendulum import PendulumSwingup\n\ndef make_environment(**options):\n    return PendulumSwingup(**options)\n'
@@ -64,3 +65,11 @@ def test_a_generator_whose_library_is_not_installed(tmp_path, monkeypatch, llm, 
     code, line = refused(colmo, f"llm={llm}", *options)
     assert (code, line) == (2, f"colmo: error: {message}")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["model.gguf"]
+
+
+def test_an_executor_whose_library_is_not_installed(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)
+    monkeypatch.chdir(tmp_path)
+    for app, argv in [(colmo, ["executor=ray"]), (optimize, [f"policy_file={EXAMPLES / 'paper_pendulum.py'}", "executor=ray"])]:
+        assert refused(app, *argv) == (2, "colmo: error: executor=ray needs Ray: pip install 'colmo[ray]'")
+    assert not any(tmp_path.iterdir())

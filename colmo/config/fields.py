@@ -1,6 +1,7 @@
 """The building blocks of every schema: a documented field (`option`), a field naming a registered
 component (`component`), and the checks that turn a bad value into one `ConfigError` line
-(`require`, `at_least`, `above`, `check_component`)."""
+(`require`, `at_least`, `above`, `check_component`), and the check that the components a config
+names have their optional libraries (`check_libraries`)."""
 
 from __future__ import annotations
 
@@ -64,3 +65,22 @@ def check_component(config: Any, name: str) -> None:
     """`ConfigError` unless the `component` field `name` of `config` names a registered
     component whose option schema `config` is."""
     registry_of(config, name).check(getattr(config, name), config)
+
+
+def check_libraries(config: Any) -> None:
+    """`ConfigError` unless every component a validated config names, at any depth, has the
+    optional library it runs on installed (`Registry.check_installed`)."""
+    for item in dataclasses.fields(config):
+        value = getattr(config, item.name)
+        if dataclasses.is_dataclass(value):
+            check_libraries(value)
+        elif _is_component(config, item.name):
+            registry_of(config, item.name).check_installed(value)
+
+
+def _is_component(schema: Any, name: str) -> bool:
+    try:
+        registry_of(schema, name)
+    except TypeError:
+        return False
+    return True

@@ -22,6 +22,7 @@ from colmo.errors import ConfigError, one_line
 from colmo.evaluation import EvalRequest, Evaluation, WorkerLost
 from colmo.executor.dispatch import EXECUTORS, Dispatcher
 from colmo.executor.local import LocalExecutor
+from colmo.registry import Library
 
 log = logging.getLogger("colmo.executor")
 
@@ -51,6 +52,7 @@ class RayExecutor(Dispatcher):
     in a process already connected to Ray, on that cluster."""
 
     options = RayExecutorConfig
+    library = Library("ray", "Ray", "colmo[ray]")
 
     def __init__(self, cfg: ExecutorConfig, max_workers: Optional[int] = None):
         ray = _import_ray()
@@ -145,7 +147,7 @@ def _import_ray():
     try:
         import ray
     except ImportError:
-        raise ConfigError("executor=ray needs Ray: pip install 'colmo[ray]'") from None
+        raise ConfigError(RayExecutor.library.missing("executor=ray")) from None
     return ray
 
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 from typing import Optional
 
 from colmo.generate import llamacpp_engine, mutate, openai_server, vllm_engine  # noqa: F401 - they register
-from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, PromptForm, check_library
+from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, PromptForm
 
-__all__ = ["GENERATORS", "Generation", "Generator", "GeneratorError", "Probe", "PromptForm", "check_library", "make_generator"]
+__all__ = ["GENERATORS", "Generation", "Generator", "GeneratorError", "Probe", "PromptForm", "make_generator"]
 
 
 def make_generator(cfg, seed: int, probe: Optional[Probe] = None) -> Generator:

@@ -13,16 +13,14 @@ import abc
 import dataclasses
 import enum
 import importlib
-import importlib.util
 import logging
 import random
-import sys
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, ClassVar, NamedTuple, Optional, Sequence
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, Optional, Sequence
 
 from colmo.config import GeneratorConfig
 from colmo.errors import one_line
-from colmo.registry import Registry
+from colmo.registry import Library, Registry
 
 if TYPE_CHECKING:
     from colmo.prompt import Prompt
@@ -96,18 +94,6 @@ class GeneratorError(RuntimeError):
 Probe = Callable[[str], bool]
 
 
-class Library(NamedTuple):
-    """An optional library a generator runs on: the module it imports, the package's name, and
-    what `pip install` takes to install it (for colmo's own generators, the extra of their name)."""
-
-    module: str
-    package: str
-    requirement: str
-
-    def missing(self, llm: str) -> str:
-        return f"llm={llm} needs {self.package}: pip install '{self.requirement}'"
-
-
 class Generator(abc.ABC):
     """Turns prompts into raw texts. Subclasses register under their `llm.name` with
     `@GENERATORS.register` and are built as `cls(cfg, seed, probe)`; `probe` is None unless
@@ -177,22 +163,7 @@ def import_library(llm: str) -> Any:
     try:
         return importlib.import_module(library.module)
     except ImportError:
-        raise GeneratorError(library.missing(llm)) from None
-
-
-def check_library(llm: str) -> None:
-    """`GeneratorError` unless the optional library `llm=<llm>` runs on, if any, is installed:
-    found, not imported (vLLM's import takes seconds), so that a run can check it before it
-    makes anything."""
-    library = GENERATORS.chosen(llm).library
-    if library is not None and not _installed(library.module):
-        raise GeneratorError(library.missing(llm))
-
-
-def _installed(module: str) -> bool:
-    if module in sys.modules:  # imported already, or stood in for (None: hidden)
-        return sys.modules[module] is not None
-    return importlib.util.find_spec(module) is not None
+        raise GeneratorError(library.missing(f"llm={llm}")) from None
 
 
 GENERATORS: Registry[type[Generator]] = Registry("llm.name")
