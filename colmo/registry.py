@@ -16,9 +16,11 @@ installed packages, and builds Hydra's schema table from them.
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import sys
 from collections.abc import Iterator, Mapping
+from types import ModuleType
 from typing import Any, Callable, Generic, NamedTuple, TypeVar
 
 from colmo.errors import ConfigError
@@ -43,6 +45,14 @@ class Library(NamedTuple):
     def missing(self, option: str) -> str:
         """The one line for `option` (`llm=vllm`) chosen without the library."""
         return f"{option} needs {self.package}: pip install '{self.requirement}'"
+
+    def load(self, option: str, error: type[Exception] = ConfigError) -> ModuleType:
+        """The imported module; `error` with the line `missing` says if it is not installed
+        (a component built without `colmo.cli`'s check, from Python)."""
+        try:
+            return importlib.import_module(self.module)
+        except ImportError:
+            raise error(self.missing(option)) from None
 
 
 class Registry(Mapping[str, T], Generic[T]):

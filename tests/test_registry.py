@@ -5,6 +5,8 @@ options that do not fit the name end in one `ConfigError` line listing the regis
 
 from __future__ import annotations
 
+import sys
+
 import pytest
 from conftest import compose
 
@@ -15,7 +17,7 @@ from colmo.executor import EXECUTORS, LocalExecutor, make_executor
 from colmo.help import help_text
 from colmo.optimize.methods import METHODS, EvaluateOnce, tunes_constants
 from colmo.optimize.tune import tune
-from colmo.registry import Registry
+from colmo.registry import Library, Registry
 from colmo.trackers import TRACKERS, NoTracker, make_tracker
 
 
@@ -61,6 +63,18 @@ def test_a_bad_component_name_is_one_line_listing_the_registry(make, message):
 def test_a_name_whose_options_the_option_file_lacks_is_refused(overrides, message):
     with pytest.raises(ConfigError, match=f"^{message}$"):
         compose("search", *overrides)
+
+
+def test_a_library_loads_its_module_or_says_how_to_install_it(monkeypatch):
+    json_library = Library("json", "JSON", "colmo[json]")
+    assert json_library.installed() and json_library.load("x=json").dumps([1]) == "[1]"
+    monkeypatch.setitem(sys.modules, "json", None)  # what an uninstalled package looks like to import
+    assert not json_library.installed()
+    with pytest.raises(ConfigError, match=r"^x=json needs JSON: pip install 'colmo\[json\]'$"):
+        json_library.load("x=json")
+    with pytest.raises(RuntimeError, match="needs JSON"):
+        json_library.load("x=json", RuntimeError)
+    assert not Library("colmo_no_such_module", "None", "none").installed()
 
 
 def test_help_lists_the_registered_names():

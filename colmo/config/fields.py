@@ -8,7 +8,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 from dataclasses import field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Optional
 
 from colmo.errors import ConfigError
 
@@ -52,13 +52,23 @@ def component(default: Any, help: str, registry: str) -> Any:  # noqa: A002 - th
 def registry_of(schema: Any, name: str) -> Registry:
     """The registry of the `component` field `name` of a schema (a dataclass or an instance),
     declared where the field is (a subclass may give it another default: `BOConfig.method`)."""
+    where = _registry_path(schema, name)
+    if where is None:
+        schema = schema if isinstance(schema, type) else type(schema)
+        raise TypeError(f"{schema.__name__}.{name} is not a component field")
+    module, attribute = where.split(":")
+    return getattr(importlib.import_module(module), attribute)
+
+
+def _registry_path(schema: Any, name: str) -> Optional[str]:
+    """Where the registry of field `name` is (`module:NAME`), None if it names no component."""
     schema = schema if isinstance(schema, type) else type(schema)
     for base in schema.__mro__:
-        metadata = {item.name: item.metadata for item in dataclasses.fields(base)}.get(name, {}) if dataclasses.is_dataclass(base) else {}
-        if "registry" in metadata:
-            module, attribute = metadata["registry"].split(":")
-            return getattr(importlib.import_module(module), attribute)
-    raise TypeError(f"{schema.__name__}.{name} is not a component field")
+        if dataclasses.is_dataclass(base):
+            metadata = {item.name: item.metadata for item in dataclasses.fields(base)}.get(name, {})
+            if "registry" in metadata:
+                return metadata["registry"]
+    return None
 
 
 def check_component(config: Any, name: str) -> None:
@@ -74,13 +84,5 @@ def check_libraries(config: Any) -> None:
         value = getattr(config, item.name)
         if dataclasses.is_dataclass(value):
             check_libraries(value)
-        elif _is_component(config, item.name):
+        elif _registry_path(config, item.name) is not None:
             registry_of(config, item.name).check_installed(value)
-
-
-def _is_component(schema: Any, name: str) -> bool:
-    try:
-        registry_of(schema, name)
-    except TypeError:
-        return False
-    return True

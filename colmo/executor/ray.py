@@ -55,7 +55,7 @@ class RayExecutor(Dispatcher):
     library = Library("ray", "Ray", "colmo[ray]")
 
     def __init__(self, cfg: ExecutorConfig, max_workers: Optional[int] = None):
-        ray = _import_ray()
+        ray = self.library.load("executor=ray")
         self._ray = ray
         self._owns_ray = not ray.is_initialized()
         if self._owns_ray:
@@ -141,14 +141,6 @@ class RayExecutor(Dispatcher):
     def _shutdown_ray(self) -> None:
         if self._owns_ray:
             self._ray.shutdown()
-
-
-def _import_ray():
-    try:
-        import ray
-    except ImportError:
-        raise ConfigError(RayExecutor.library.missing("executor=ray")) from None
-    return ray
 
 
 def _init_ray(ray, cfg: ExecutorConfig) -> None:

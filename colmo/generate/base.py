@@ -12,11 +12,10 @@ from __future__ import annotations
 import abc
 import dataclasses
 import enum
-import importlib
 import logging
 import random
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, ClassVar, Optional, Sequence
+from typing import TYPE_CHECKING, Callable, ClassVar, Optional, Sequence
 
 from colmo.config import GeneratorConfig
 from colmo.errors import one_line
@@ -154,16 +153,6 @@ class LanguageModelGenerator(Generator):
         """What an answer to `prompt` is read with (`Generation.context`): the prompt's code in the
         chat form, its text in the completion form."""
         return prompt.shown_code if self.chat else prompt.text
-
-
-def import_library(llm: str) -> Any:
-    """The optional library `llm=<llm>` runs on (`Generator.library`); `GeneratorError` saying
-    how to install it."""
-    library = GENERATORS.chosen(llm).library
-    try:
-        return importlib.import_module(library.module)
-    except ImportError:
-        raise GeneratorError(library.missing(f"llm={llm}")) from None
 
 
 GENERATORS: Registry[type[Generator]] = Registry("llm.name")

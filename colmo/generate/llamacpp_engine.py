@@ -22,7 +22,7 @@ from typing import Any, Optional
 import numpy as np
 
 from colmo.config import LlamaCppConfig
-from colmo.generate.base import GENERATORS, Generation, GeneratorError, LanguageModelGenerator, Library, Probe, describe_error, import_library, logger
+from colmo.generate.base import GENERATORS, Generation, GeneratorError, LanguageModelGenerator, Library, Probe, describe_error, logger
 from colmo.prompt import COMPLETION_STOP, Prompt
 
 
@@ -50,7 +50,7 @@ class LlamaCppGenerator(LanguageModelGenerator):
 
     def __init__(self, cfg: LlamaCppConfig, seed: int, probe: Optional[Probe] = None):
         super().__init__(cfg, seed, probe)
-        llama_cpp = import_library("llamacpp")
+        llama_cpp = self.library.load(f"llm={cfg.name}", GeneratorError)
         options = dict(
             n_ctx=cfg.n_ctx, n_threads=cfg.n_threads, n_threads_batch=cfg.n_threads, n_gpu_layers=cfg.n_gpu_layers,
             verbose=False,

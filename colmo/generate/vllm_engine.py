@@ -12,7 +12,7 @@ import time
 from typing import Optional
 
 from colmo.config import VLLMConfig
-from colmo.generate.base import GENERATORS, Generation, GeneratorError, LanguageModelGenerator, Library, Probe, batch_of, describe_error, import_library, logger
+from colmo.generate.base import GENERATORS, Generation, GeneratorError, LanguageModelGenerator, Library, Probe, batch_of, describe_error, logger
 from colmo.prompt import COMPLETION_STOP, Prompt
 
 
@@ -25,7 +25,7 @@ class VLLMGenerator(LanguageModelGenerator):
 
     def __init__(self, cfg: VLLMConfig, seed: int, probe: Optional[Probe] = None):
         super().__init__(cfg, seed, probe)
-        vllm = import_library("vllm")
+        vllm = self.library.load(f"llm={cfg.name}", GeneratorError)
         self.name = f"vllm:{cfg.model}"
         self._sampling_params = vllm.SamplingParams
         try:
