@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import Iterator, Optional
 
 from colmo import astutil
-from colmo.astutil import bindings, strip_docstrings
+from colmo.astutil import bindings, names_read, strip_docstrings
 from colmo.simplify.fold import Fold, fold_accumulator_starts
 from colmo.simplify.scope import Scope
 
@@ -29,8 +29,8 @@ BLOCKS = ("body", "orelse", "finalbody")
 FUNCTIONS = (ast.FunctionDef, ast.AsyncFunctionDef)
 
 
-def _loads(node: ast.AST) -> set[str]:
-    return {n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+def _reads(node: ast.AST) -> set[str]:
+    return set(names_read(node))
 
 
 def _target_reads(target: ast.expr) -> set[str]:
@@ -41,7 +41,7 @@ def _target_reads(target: ast.expr) -> set[str]:
         return set().union(*(_target_reads(t) for t in target.elts))
     if isinstance(target, ast.Starred):
         return _target_reads(target.value)
-    return _loads(target)
+    return _reads(target)
 
 
 def _target_names(target: ast.expr) -> Optional[set[str]]:
@@ -173,9 +173,9 @@ class _Liveness:
 
     def statement(self, s: ast.stmt, live: set[str], flow: _Flow) -> tuple[Optional[ast.stmt], set[str]]:
         if isinstance(s, ast.Return):
-            return s, _loads(s.value) if s.value else set()
+            return s, _reads(s.value) if s.value else set()
         if isinstance(s, ast.Raise):
-            return s, _loads(s)
+            return s, _reads(s)
         if isinstance(s, ast.Break):
             return s, set(flow.after_loop or ())
         if isinstance(s, ast.Continue):
@@ -189,10 +189,10 @@ class _Liveness:
                 bound = set().union(*names)
                 if self.removable(bound, live) and self.scope.is_pure(s.value):
                     return None, live
-                return s, (live - bound) | _loads(s.value)
-            return s, live | _loads(s.value) | set().union(*(_target_reads(t) for t in targets))
+                return s, (live - bound) | _reads(s.value)
+            return s, live | _reads(s.value) | set().union(*(_target_reads(t) for t in targets))
         if isinstance(s, ast.AugAssign):  # `a += v` reads `a` (and may write into its object)
-            return s, live | _loads(s.value) | {n.id for n in ast.walk(s.target) if isinstance(n, ast.Name)}
+            return s, live | _reads(s.value) | {n.id for n in ast.walk(s.target) if isinstance(n, ast.Name)}
         if isinstance(s, (ast.Import, ast.ImportFrom)):
             if any(alias.name == "*" for alias in s.names):
                 return s, live
@@ -205,17 +205,17 @@ class _Liveness:
             evaluated = [*s.decorator_list, *s.args.defaults, *(d for d in s.args.kw_defaults if d)]
             if self.removable({s.name}, live) and all(self.scope.is_pure(e) for e in evaluated):
                 return None, live
-            return s, (live - {s.name}) | set().union(*(_loads(e) for e in evaluated))
+            return s, (live - {s.name}) | set().union(*(_reads(e) for e in evaluated))
         if isinstance(s, ast.If):
             s.body, live_body = self.block(s.body, live, flow)
             s.orelse, live_else = self.block(s.orelse, live, flow)
             if not s.body:
                 s.body = [ast.Pass()]
-            return s, _loads(s.test) | live_body | live_else
+            return s, _reads(s.test) | live_body | live_else
         if isinstance(s, (ast.For, ast.While)):
             return self.loop(s, live, flow)
         if isinstance(s, (ast.Expr, ast.Pass, ast.Global, ast.Nonlocal, ast.Assert)):
-            return s, live | _loads(s)
+            return s, live | _reads(s)
         # Anything else (try, with, match, del...): keep it whole, kill nothing, and count every
         # name it mentions as read (`del x` needs x bound), as well as where it may jump to.
         jumps = (flow.after_loop or set()) | (flow.loop_head or set())
@@ -230,14 +230,14 @@ class _Liveness:
             if isinstance(s, ast.For):
                 new_head = live_else | (live_body - (_target_names(s.target) or set())) | _target_reads(s.target)
             else:
-                new_head = live_else | live_body | _loads(s.test)
+                new_head = live_else | live_body | _reads(s.test)
             if new_head <= head:
                 break
             head |= new_head
         s.body, _ = self.block(s.body, head, _Flow(after_loop=live, loop_head=head))
         s.body = s.body or [ast.Pass()]
         s.orelse, _ = self.block(s.orelse, live, flow)
-        return s, (head | _loads(s.iter)) if isinstance(s, ast.For) else head
+        return s, (head | _reads(s.iter)) if isinstance(s, ast.For) else head
 
 
 def _nested_scope_reads(function: ast.AST) -> set[str]:
@@ -245,7 +245,7 @@ def _nested_scope_reads(function: ast.AST) -> set[str]:
     reads: set[str] = set()
     for node in ast.walk(function):
         if node is not function and isinstance(node, (*FUNCTIONS, ast.Lambda, ast.ClassDef)):
-            reads |= _loads(node)
+            reads |= _reads(node)
     return reads
 
 
@@ -336,7 +336,7 @@ def _module_liveness(tree: ast.Module, scope: Scope, function_name: str) -> None
     for node in ast.walk(tree):
         if isinstance(node, (*FUNCTIONS, ast.Lambda)):
             body = node.body if isinstance(node.body, list) else [node.body]
-            read_by_functions |= set().union(*(_loads(s) for s in body))
+            read_by_functions |= set().union(*(_reads(s) for s in body))
     pinned = _declared(tree) | {function_name}
     tree.body, _ = _Liveness(scope, pinned).block(tree.body, read_by_functions, _Flow())
 
