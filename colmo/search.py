@@ -10,7 +10,10 @@ database after batches `0 .. k - queue_size` have been integrated, in order, so 
 deterministic function of its seed whatever the timing. A batch is written to the store as
 `pending` as soon as it is generated, and each sample's row is replaced by its outcome as soon
 as that is known: the store's sample numbers never have a gap, and a resumed run evaluates
-what was generated but not evaluated.
+what was generated but not evaluated. With `search.steady_state` a batch is one child for each
+idle worker, drawn when the worker frees (asynchronous steady-state evolution: every prompt
+shows all that is in); the programs still enter the database in order, but which are in when a
+prompt is drawn depends on timing.
 
 A duplicate answer (by structure with GFO, by code and constants with `gfo=none`) is generated
 again up to `search.duplicate_retries` times (`colmo.answers`: a chat model is told what it
@@ -78,7 +81,7 @@ from colmo.sampler import POLL_S, Sampler
 from colmo.signals import stop_signals
 from colmo.specs import Spec, load_task_spec
 from colmo.store import StoreError, open_run, run_settings, write_outputs
-from colmo.timelimit import TimeBudget
+from colmo.timelimit import TimeBudget, programs_at_once
 
 log = logging.getLogger("colmo.search")
 
@@ -114,7 +117,7 @@ class Search:
         self.sampler = Sampler(cfg, self.spec, self.reader, generator)
         self.stopping = threading.Event()  # programs in flight stop tuning at their next candidate
         self.outcomes = SampleOutcomes(
-            cfg, self.store, self.executor, cfg.llm.batch_size * cfg.search.queue_size, self._tuning_must_stop,
+            cfg, self.store, self.executor, programs_at_once(cfg, self.executor.n_workers), self._tuning_must_stop,
             observe=lambda result: self.budget.observe(result),
         )
         self.load = LoadMeter()
@@ -175,8 +178,11 @@ class Search:
         in_flight = self.in_flight
         if resumed:
             in_flight.append(self._reevaluate(resumed))
+        steady = self.cfg.search.steady_state
         while True:
-            while self._model_may_call() and len(in_flight) < self.cfg.search.queue_size and self._samples_left() > 0:
+            if steady and self._model_may_call():
+                self._feed_idle_workers(self.sampler.generator)
+            while not steady and self._model_may_call() and len(in_flight) < self.cfg.search.queue_size and self._samples_left() > 0:
                 batch = self._generate(self.sampler.generator, self._batch_size())
                 if batch is None:
                     break
@@ -184,8 +190,12 @@ class Search:
             if not in_flight:
                 self.stop_reason = self.stop_reason or "max_samples"
                 return
-            self._integrate(in_flight.popleft())
-            self._check_limits()
+            if steady:
+                self._wait_for_a_program()
+                self._integrate_done()
+            else:
+                self._integrate(in_flight.popleft())
+                self._check_limits()
 
     # -- set-up and resume -----------------------------------------------------------------------
 
@@ -258,12 +268,16 @@ class Search:
         workers meanwhile; False if the search is stopping."""
         while not self._stop_requested() and self.model_share.paused():
             self._fill()
-            unsettled = [outcome for batch in self.in_flight for outcome in batch.outcomes if not outcome.done()]
-            if unsettled:
-                concurrent.futures.wait(unsettled, timeout=POLL_S, return_when=concurrent.futures.FIRST_COMPLETED)
-            else:
-                time.sleep(POLL_S)
+            self._wait_for_a_program()
         return not self._stop_requested()
+
+    def _wait_for_a_program(self) -> None:
+        """Until a program in flight is in, or `POLL_S` has passed."""
+        unsettled = [outcome for batch in self.in_flight for outcome in batch.outcomes if not outcome.done()]
+        if unsettled:
+            concurrent.futures.wait(unsettled, timeout=POLL_S, return_when=concurrent.futures.FIRST_COMPLETED)
+        else:
+            time.sleep(POLL_S)
 
     def _abandon_generation(self, programs: int) -> bool:
         """Asked while the generator's call is in flight: whether to abandon it (the search is
@@ -284,18 +298,29 @@ class Search:
 
     def _fill(self) -> None:
         """Integrate the batches that are in, and give idle workers a batch of the filler's."""
-        if self.sampler.filler is None:
-            return
-        while self.in_flight and self.in_flight[0].done():
-            self._integrate(self.in_flight.popleft())
-            self._check_limits()
+        if self.sampler.filler is not None:
+            self._feed_idle_workers(self.sampler.filler)
+
+    def _feed_idle_workers(self, generator: Generator) -> None:
+        """Integrate the batches that are in, in order, and give idle workers a batch of
+        `generator`'s: a child each, drawn from the database as it is now."""
+        self._integrate_done()
         idle = self.executor.n_workers - self.outcomes.running() * self.cfg.gfo.workers
         if idle > 0 and not self._stop_requested():
-            batch = self._generate(self.sampler.filler, self.budget.programs_that_fit(min(idle, self._samples_left())))
+            size = self.budget.programs_that_fit(min(idle, self._samples_left()))
+            if not size and self._samples_left() > 0 and generator is self.sampler.generator:
+                self.stop_reason = self.stop_reason or "max_seconds"  # the time left takes no program more
+            batch = self._generate(generator, size)
             if batch is not None:
                 self.in_flight.append(batch)
 
     # -- integration ----------------------------------------------------------------------------
+
+    def _integrate_done(self) -> None:
+        """Integrate the batches in flight that are in, in order."""
+        while self.in_flight and self.in_flight[0].done():
+            self._integrate(self.in_flight.popleft())
+            self._check_limits()
 
     def _integrate(self, batch: Batch) -> None:
         while not concurrent.futures.wait(batch.outcomes, timeout=POLL_S).not_done == set():

@@ -54,6 +54,19 @@ _OBSERVED = 8  # programs whose final scores say what the next ones' will cost
 _RESAY = 0.3  # an estimate of the search's end is said again when it moves by more than this share
 
 
+def programs_per_batch(cfg: SearchConfig) -> int:
+    """The programs one generation adds: `llm.batch_size`, or one with `search.steady_state`."""
+    return 1 if cfg.search.steady_state else cfg.llm.batch_size
+
+
+def programs_at_once(cfg: SearchConfig, workers: int) -> int:
+    """The most programs a search has in flight: `search.queue_size` batches, or with
+    `search.steady_state` one a program's worth of workers (`gfo.workers`)."""
+    if cfg.search.steady_state:
+        return max(1, workers // cfg.gfo.workers)
+    return cfg.llm.batch_size * cfg.search.queue_size
+
+
 class TimeBudget:
     """The time of one search from `start` (`time.perf_counter()`) to `end`, its limit (inf
     without `search.max_seconds`), and the search's `deadline` in between: until the starter's
@@ -191,8 +204,7 @@ class TimeBudget:
         self.calibration = RefereeCost.of(*calibration, cfg.task.episodes)
         self._calibration_referee = calibration[1]
         self._reference = executor.busy_seconds / executor.evaluations_done if executor.evaluations_done else 0.0
-        concurrent_programs = cfg.llm.batch_size * cfg.search.queue_size
-        in_parallel = max(1, min(concurrent_programs, workers // cfg.gfo.workers))
+        in_parallel = max(1, min(programs_at_once(cfg, workers), workers // cfg.gfo.workers))
         search = cfg.search.max_samples * program_seconds / in_parallel if program_seconds else None
         self.estimated_seconds = None if search is None else self.elapsed() + search
         if isinstance(cfg.llm, LanguageModelConfig) and program_seconds:
@@ -207,11 +219,11 @@ class TimeBudget:
             limit = f"max_seconds={self.max_seconds:g}"
             if search is None:
                 limit = f"max_samples={cfg.search.max_samples} or {limit}, whichever comes first"
-            elif self.deadline_with(cfg.llm.batch_size) - time.perf_counter() >= search:
+            elif self.deadline_with(programs_per_batch(cfg)) - time.perf_counter() >= search:
                 limit = "max_samples"
         early = ""
         if "max_seconds" in limit:
-            early = f" (search stops {duration(self.end - self.deadline_with(cfg.llm.batch_size))} early to finish)"
+            early = f" (search stops {duration(self.end - self.deadline_with(programs_per_batch(cfg)))} early to finish)"
             if not self.can_start(1):
                 early = " (no time left to search: the finish works on the starter)"
         if search is None:

@@ -123,6 +123,13 @@ class SearchLoopConfig:
     )
     stop_at_score: Optional[float] = option(None, "stop once the best training score reaches this")
     queue_size: int = option(2, "batches in flight: generation overlaps evaluation")
+    steady_state: bool = option(
+        False, "instead of llm.batch_size children a prompt and search.queue_size batches in flight, each idle worker gets "
+        "one child, from a prompt drawn when it frees, and each program enters the database as soon as it and those before it "
+        "are in (asynchronous steady-state evolution, as search.fill draws); for the embedded generator, whose answers take "
+        "no time (a model's call would leave the workers idle). The mix of what a prompt shows depends on timing, so such a "
+        "run is no longer a deterministic function of its seed",
+    )
     fill: Optional[str] = option(
         None, "mutate: while the generator's call is in flight, batches of colmo's embedded mutation of the best programs "
         "(the generator's included) keep idle workers busy, in the same islands; samples record which generator made them "
