@@ -5,7 +5,7 @@
 #   mutate: colmo's embedded mutation alone
 #   model:  the 1.5B model alone (seed 0 only)
 #   by_yield: mixed, the model's share of the time following its yield (search.model_share=by_yield)
-#   mutate_b1: mutation alone drawing one child per prompt (llm.batch_size=1), as the filler draws
+#   steady: mutation alone drawing as the filler draws, a child per idle worker (search.steady_state=true)
 # Seed 0 of every variant first, then seeds 1 and 2. Each run is a one-job sweep into its own
 # directory, so running this again keeps what finished and resumes the rest.
 #
@@ -15,7 +15,7 @@
 set -u
 out=$(mkdir -p "$1" && cd "$1" && pwd); shift
 tasks=${*:-pendulum cheetah}
-variants=" ${VARIANTS:-mixed mutate mutate_b1 model by_yield} "
+variants=" ${VARIANTS:-mixed mutate steady model by_yield} "
 model=$(python "$(dirname "$0")/fetch_test_model.py" --size 1.5b)
 cd "$out"
 run() {  # task variant seed overrides...
@@ -28,7 +28,7 @@ for seed in ${SEEDS:-0 1 2}; do
   for task in $tasks; do
     run "$task" mixed "$seed" llm=llamacpp "llm.model_path=$model" search.fill=mutate
     run "$task" mutate "$seed" llm=mutate
-    run "$task" mutate_b1 "$seed" llm=mutate llm.batch_size=1
+    run "$task" steady "$seed" llm=mutate search.steady_state=true
     if [ "$seed" = 0 ]; then run "$task" model "$seed" llm=llamacpp "llm.model_path=$model"; fi
     run "$task" by_yield "$seed" llm=llamacpp "llm.model_path=$model" search.fill=mutate search.model_share=by_yield
   done
