@@ -4,9 +4,10 @@ With `always` a search calls its model back to back, as it does without a filler
 `by_yield` it measures, as it goes, what each generator's samples yield for what they cost:
 the island bests they set (a sample scoring above every program of its island so far) per
 CPU-second (their programs' evaluation, and for the model its calls times the cores of this
-machine they keep busy, `Generator.cores`). After each call the model pauses so that it calls
-for a share of the time equal to its yield's part of the two yields, and never less than
-`search.min_model_share`; while it pauses the filler has the workers and the cores. A model
+machine they keep busy, `Generator.cores`). After each call the model pauses so that its calls,
+since the first began, take a share of the time equal to its yield's part of the two yields,
+never less than `search.min_model_share`: a long call, or calls made while its share was higher,
+are paid for by a longer pause. While it pauses the filler has the workers and the cores. A model
 that pays on this machine is called often; one that does not costs little, and is still asked
 now and then, since its programs and what it makes of mutation's change as the search goes.
 This is probability matching over two arms whose pulls are shares of time, each rate starting
@@ -17,7 +18,7 @@ from __future__ import annotations
 
 import logging
 import time
-from typing import TYPE_CHECKING, Any, Mapping, Optional
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Optional
 
 if TYPE_CHECKING:
     from colmo.generate import Generator
@@ -45,20 +46,24 @@ def model_share(model: Mapping[str, Any], model_cores: int, filler: Mapping[str,
     return max(floor, model_yield / (model_yield + filler_yield))
 
 
-def pause_after(call_seconds: float, share: float) -> float:
-    """How long the model waits after a call of `call_seconds` so that it calls for `share` of the time."""
-    return call_seconds * (1.0 - share) / share
+def next_call_at(first_call_began: float, calling_seconds: float, share: float) -> float:
+    """When the model may call again so that its calls since the first began, `calling_seconds`
+    in all, have taken `share` of the time."""
+    return first_call_began + calling_seconds / share
 
 
 class ModelShare:
     """When a search's model may call next: at once with `always`; with `by_yield`, after the
     pause its share says, measured on the generators' samples settled by the end of each call."""
 
-    def __init__(self, mode: str, floor: float):
+    def __init__(self, mode: str, floor: float, clock: Callable[[], float] = time.perf_counter):
         self.by_yield = mode == "by_yield"
         self.floor = floor
-        self.pauses_until = 0.0  # `time.perf_counter()` before which the model is not called
+        self.clock = clock
+        self.pauses_until = 0.0  # `clock()` before which the model is not called
         self.filler_label = ""  # the label of the filler's samples (`Counters.by_generator`), once it has made some
+        self.first_call_began: Optional[float] = None
+        self.calling_seconds = 0.0  # the model's calls so far, in all
 
     def called(
         self, model: "Generator", label: str, seconds: float, filler: Optional["Generator"], by_generator: Mapping[str, Mapping[str, Any]],
@@ -68,8 +73,12 @@ class ModelShare:
             return
         mine, filler_entry = by_generator.get(label, {}), by_generator.get(self.filler_label, {})
         share = model_share(mine, model.cores(), filler_entry, filler.cores(), self.floor)
-        pause = pause_after(seconds, share)
-        self.pauses_until = time.perf_counter() + pause
+        now = self.clock()
+        if self.first_call_began is None:
+            self.first_call_began = now - seconds
+        self.calling_seconds += seconds
+        self.pauses_until = next_call_at(self.first_call_began, self.calling_seconds, share)
+        pause = max(0.0, self.pauses_until - now)
         log.info(
             "model share %.2f (island bests per 1000 CPU-seconds: %s %.2f, %s %.2f): its next call in %.1f s",
             share, label, 1000 * island_bests_per_cpu_second(mine, model.cores()),
@@ -77,4 +86,4 @@ class ModelShare:
         )
 
     def paused(self) -> bool:
-        return time.perf_counter() < self.pauses_until
+        return self.clock() < self.pauses_until

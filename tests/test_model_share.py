@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from colmo.model_share import PRIOR_CPU_S, ModelShare, cpu_seconds, island_bests_per_cpu_second, model_share, pause_after
+from colmo.model_share import PRIOR_CPU_S, ModelShare, cpu_seconds, island_bests_per_cpu_second, model_share, next_call_at
 
 
 def entry(island_bests: int, evaluation_seconds: float, generation_seconds: float = 0.0) -> dict:
@@ -40,10 +40,10 @@ def test_a_model_on_this_machines_cores_is_charged_for_its_calls():
     assert model_share(model, 2, filler, 1, floor=0.01) < model_share(model, 1, filler, 1, floor=0.01) < model_share(model, 0, filler, 1, floor=0.01)
 
 
-def test_the_pause_after_a_call_gives_the_model_its_share_of_the_time():
-    assert pause_after(30.0, 1.0) == 0.0
-    assert pause_after(30.0, 0.5) == pytest.approx(30.0)
-    assert pause_after(30.0, 0.1) == pytest.approx(270.0)  # 30 s calling in every 300
+def test_the_next_call_waits_until_the_calls_so_far_are_the_models_share_of_the_time():
+    assert next_call_at(100.0, 30.0, 1.0) == 130.0  # all the time: at once after a 30-s call begun at 100
+    assert next_call_at(100.0, 30.0, 0.5) == pytest.approx(160.0)
+    assert next_call_at(100.0, 30.0, 0.1) == pytest.approx(400.0)  # 30 s calling in every 300
 
 
 class OnCores:
@@ -67,7 +67,49 @@ def test_by_yield_the_model_pauses_after_a_call_and_always_it_never_does():
     pacing.called(OnCores(1), "model", 60.0, OnCores(1), by_generator)
     assert pacing.paused()
     # Yields 1/500 against 41/1010: held at the floor, the model waits nine times its call.
-    assert pacing.pauses_until - before >= pause_after(60.0, 0.1) == pytest.approx(540.0)
+    assert pacing.pauses_until - before == pytest.approx(540.0, abs=1.0)
     without_filler = ModelShare("by_yield", 0.1)
     without_filler.called(OnCores(1), "model", 60.0, None, by_generator)
     assert not without_filler.paused()
+
+
+class Clock:
+    """A clock a test moves."""
+
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+@pytest.mark.parametrize("floor", [0.1, 0.25])
+def test_calls_of_any_length_take_the_models_share_of_the_time(floor):
+    # A model held at its floor: calls of 150, 98, 220, 60 and 500 s (the 1.5B model's, with
+    # its duplicates asked again) take `floor` of the time up to each next call, whatever each lasted.
+    by_generator = {"model": entry(0, 100.0, 300.0), "mutate": entry(40, 900.0, 10.0)}
+    clock = Clock()
+    pacing = ModelShare("by_yield", floor, clock)
+    pacing.filler_label = "mutate"
+    began, calling = clock.now, 0.0
+    for seconds in (150.0, 98.0, 220.0, 60.0, 500.0):
+        clock.now += seconds
+        calling += seconds
+        pacing.called(OnCores(1), "model", seconds, OnCores(1), by_generator)
+        assert pacing.paused()
+        clock.now = pacing.pauses_until
+        assert not pacing.paused()
+        assert calling / (clock.now - began) == pytest.approx(floor)
+
+
+def test_a_share_that_falls_makes_the_model_pay_for_its_earlier_calls():
+    clock = Clock()
+    pacing = ModelShare("by_yield", 0.1, clock)
+    pacing.filler_label = "mutate"
+    clock.now += 100.0
+    pacing.called(OnCores(1), "model", 100.0, OnCores(1), {})  # nothing measured: half the time
+    assert pacing.pauses_until == pytest.approx(clock.now + 100.0)
+    clock.now = pacing.pauses_until + 10.0
+    poor = {"model": entry(0, 100.0, 300.0), "mutate": entry(40, 900.0, 10.0)}
+    pacing.called(OnCores(1), "model", 10.0, OnCores(1), poor)  # now at the floor: 110 s of calling in 1100
+    assert pacing.pauses_until == pytest.approx(1000.0 + 1100.0)
