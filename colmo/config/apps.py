@@ -9,7 +9,7 @@ from omegaconf import MISSING
 
 from colmo.config.components import ExecutorConfig, GFOConfig, TrackerConfig
 from colmo.config.fields import option, require
-from colmo.config.generators import GeneratorConfig
+from colmo.config.generators import GeneratorConfig, LanguageModelConfig
 from colmo.config.search import DatabaseConfig, FinishConfig, HeldoutConfig, SearchLoopConfig, SimplifyConfig
 from colmo.config.task import MAX_EPISODES_HELP, PRECISION_HELP, ROBUSTNESS_DELAYS, ROBUSTNESS_MAGNITUDES, TaskConfig, check_robustness_grid
 
@@ -33,6 +33,11 @@ class SearchConfig:
 
     def __post_init__(self) -> None:
         require(self.seed >= 0, f"seed must be >= 0, got {self.seed}")
+        require(
+            not (self.search.steady_state and isinstance(self.llm, LanguageModelConfig)),
+            f"search.steady_state=true is for llm=mutate, whose answers take no time: with llm={self.llm.name} the workers "
+            "would wait for each call (search.fill=mutate keeps them busy while the model writes)",
+        )
 
 
 @dataclass
