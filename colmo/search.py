@@ -10,10 +10,8 @@ database after batches `0 .. k - queue_size` have been integrated, in order, so 
 deterministic function of its seed whatever the timing. A batch is written to the store as
 `pending` as soon as it is generated, and each sample's row is replaced by its outcome as soon
 as that is known: the store's sample numbers never have a gap, and a resumed run evaluates
-what was generated but not evaluated. With `search.steady_state` a batch is one child for each
-idle worker, drawn when the worker frees (asynchronous steady-state evolution: every prompt
-shows all that is in); the programs still enter the database in order, but which are in when a
-prompt is drawn depends on timing.
+what was generated but not evaluated. With `search.steady_state` each idle worker gets a child
+of its own, drawn when it frees: which programs are in when a prompt is drawn depends on timing.
 
 A duplicate answer (by structure with GFO, by code and constants with `gfo=none`) is generated
 again up to `search.duplicate_retries` times (`colmo.answers`: a chat model is told what it
@@ -47,7 +45,7 @@ import threading
 import time
 from collections import deque
 from pathlib import Path
-from typing import Optional
+from typing import Callable, Optional
 
 from colmo.answers import AnswerReader
 from colmo.config import SearchConfig
@@ -64,19 +62,7 @@ from colmo.model_share import ModelShare
 from colmo.optimize.methods import tunes_constants
 from colmo.outcomes import Batch, SampleOutcomes
 from colmo.program import STRUCTURE_KEY_VERSION, parametrize
-from colmo.record import (
-    FINISHED,
-    PENDING,
-    BatchReport,
-    Counters,
-    Elapsed,
-    Sample,
-    SampleRecord,
-    SearchObserver,
-    Summary,
-    Totals,
-    generator_label,
-)
+from colmo.record import FINISHED, PENDING, BatchReport, Counters, Elapsed, Sample, SampleRecord, SearchObserver, Summary, Totals, generator_label
 from colmo.sampler import POLL_S, Sampler
 from colmo.signals import stop_signals
 from colmo.specs import Spec, load_task_spec
@@ -164,8 +150,7 @@ class Search:
             best_program = self.database.best if self.database else None
             summary = best.summary(
                 self.cfg.task.name, best_program, self.ledger.best_so_far if self.ledger else (), self.stop_reason, self.run_dir,
-                self.totals(), *self.budget.phases(),
-                by_generator=self.counters.by_generator,
+                self.totals(), *self.budget.phases(), by_generator=self.counters.by_generator,
             )
             write_outputs(summary, self.run_dir)
             for observer in self.observers:
@@ -181,9 +166,9 @@ class Search:
         steady = self.cfg.search.steady_state
         while True:
             if steady and self._model_may_call():
-                self._feed_idle_workers(self.sampler.generator)
+                self._feed_idle_workers(self.sampler.generator, self._batch_size)
             while not steady and self._model_may_call() and len(in_flight) < self.cfg.search.queue_size and self._samples_left() > 0:
-                batch = self._generate(self.sampler.generator, self._batch_size())
+                batch = self._generate(self.sampler.generator, self._batch_size(self.cfg.llm.batch_size))
                 if batch is None:
                     break
                 in_flight.append(batch)
@@ -299,18 +284,15 @@ class Search:
     def _fill(self) -> None:
         """Integrate the batches that are in, and give idle workers a batch of the filler's."""
         if self.sampler.filler is not None:
-            self._feed_idle_workers(self.sampler.filler)
+            self._feed_idle_workers(self.sampler.filler, self._programs_that_fit)
 
-    def _feed_idle_workers(self, generator: Generator) -> None:
-        """Integrate the batches that are in, in order, and give idle workers a batch of
-        `generator`'s: a child each, drawn from the database as it is now."""
+    def _feed_idle_workers(self, generator: Generator, batch_size: Callable[[int], int]) -> None:
+        """Integrate the batches that are in, in order, and give idle workers a batch of `generator`'s:
+        a child each, drawn from the database as it is now, as many as `batch_size(idle)` allows."""
         self._integrate_done()
         idle = self.executor.n_workers - self.outcomes.running() * self.cfg.gfo.workers
         if idle > 0 and not self._stop_requested():
-            size = self.budget.programs_that_fit(min(idle, self._samples_left()))
-            if not size and self._samples_left() > 0 and generator is self.sampler.generator:
-                self.stop_reason = self.stop_reason or "max_seconds"  # the time left takes no program more
-            batch = self._generate(generator, size)
+            batch = self._generate(generator, batch_size(idle))
             if batch is not None:
                 self.in_flight.append(batch)
 
@@ -357,11 +339,14 @@ class Search:
             log.info("search deadline: %d programs in flight stop tuning and score their best constants", self.outcomes.running())
         return bool(self.stop_reason)
 
-    def _batch_size(self) -> int:
-        """`llm.batch_size`, or fewer if fewer samples are left or the time left can tune and drain
-        fewer programs; 0 ends the generation (the search stops once the programs in flight are in)."""
-        size = self.budget.programs_that_fit(min(self.cfg.llm.batch_size, self._samples_left()))
-        if not size:
+    def _programs_that_fit(self, most: int) -> int:
+        """`most`, or fewer if fewer samples are left or the time left can tune and drain fewer programs."""
+        return self.budget.programs_that_fit(min(most, self._samples_left()))
+
+    def _batch_size(self, most: int) -> int:
+        """The generator's next batch; 0 while samples are left ends the generation, for lack of time."""
+        size = self._programs_that_fit(most)
+        if not size and self._samples_left() > 0:
             self.stop_reason = self.stop_reason or "max_seconds"
         return size
 
