@@ -67,7 +67,7 @@ from colmo.sampler import POLL_S, Sampler
 from colmo.signals import stop_signals
 from colmo.specs import Spec, load_task_spec
 from colmo.store import StoreError, open_run, run_settings, write_outputs
-from colmo.timelimit import TimeBudget, programs_at_once
+from colmo.timelimit import TimeBudget, program_slots, programs_at_once
 
 log = logging.getLogger("colmo.search")
 
@@ -166,7 +166,7 @@ class Search:
         steady = self.cfg.search.steady_state
         while True:
             if steady and self._model_may_call():
-                self._feed_idle_workers(self.sampler.generator, self._batch_size)
+                self._feed_idle_workers(self.sampler.generator, self._batch_size, self.cfg.search.steady_queue)
             while not steady and self._model_may_call() and len(in_flight) < self.cfg.search.queue_size and self._samples_left() > 0:
                 batch = self._generate(self.sampler.generator, self._batch_size(self.cfg.llm.batch_size))
                 if batch is None:
@@ -286,13 +286,13 @@ class Search:
         if self.sampler.filler is not None:
             self._feed_idle_workers(self.sampler.filler, self._programs_that_fit)
 
-    def _feed_idle_workers(self, generator: Generator, batch_size: Callable[[int], int]) -> None:
-        """Integrate the batches that are in, in order, and give idle workers a batch of `generator`'s:
-        a child each, drawn from the database as it is now, as many as `batch_size(idle)` allows."""
+    def _feed_idle_workers(self, generator: Generator, batch_size: Callable[[int], int], ahead: int = 0) -> None:
+        """Integrate the batches that are in, in order, and give each free program slot (`gfo.workers` workers, and `ahead`
+        more) a child of `generator`'s, drawn from the database as it is now, as many as `batch_size(free)` allows."""
         self._integrate_done()
-        idle = self.executor.n_workers - self.outcomes.running() * self.cfg.gfo.workers
-        if idle > 0 and not self._stop_requested():
-            batch = self._generate(generator, batch_size(idle))
+        free = program_slots(self.cfg, self.executor.n_workers) + ahead - self.outcomes.running()
+        if free > 0 and not self._stop_requested():
+            batch = self._generate(generator, batch_size(free))
             if batch is not None:
                 self.in_flight.append(batch)
 

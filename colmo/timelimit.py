@@ -59,11 +59,16 @@ def programs_per_batch(cfg: SearchConfig) -> int:
     return 1 if cfg.search.steady_state else cfg.llm.batch_size
 
 
+def program_slots(cfg: SearchConfig, workers: int) -> int:
+    """The programs `workers` tune at once: one per `gfo.workers` workers, at least one."""
+    return max(1, workers // cfg.gfo.workers)
+
+
 def programs_at_once(cfg: SearchConfig, workers: int) -> int:
     """The most programs a search has in flight: `search.queue_size` batches, or with
-    `search.steady_state` one a program's worth of workers (`gfo.workers`)."""
+    `search.steady_state` one per program slot and `search.steady_queue` more."""
     if cfg.search.steady_state:
-        return max(1, workers // cfg.gfo.workers)
+        return program_slots(cfg, workers) + cfg.search.steady_queue
     return cfg.llm.batch_size * cfg.search.queue_size
 
 
@@ -204,7 +209,7 @@ class TimeBudget:
         self.calibration = RefereeCost.of(*calibration, cfg.task.episodes)
         self._calibration_referee = calibration[1]
         self._reference = executor.busy_seconds / executor.evaluations_done if executor.evaluations_done else 0.0
-        in_parallel = max(1, min(programs_at_once(cfg, workers), workers // cfg.gfo.workers))
+        in_parallel = min(programs_at_once(cfg, workers), program_slots(cfg, workers))
         search = cfg.search.max_samples * program_seconds / in_parallel if program_seconds else None
         self.estimated_seconds = None if search is None else self.elapsed() + search
         if isinstance(cfg.llm, LanguageModelConfig) and program_seconds:

@@ -28,6 +28,7 @@ CASES = [
     (["task.episodes=0"], "task.episodes must be >= 1, got 0"),
     (["database.num_islands=0"], "database.num_islands must be >= 1, got 0"),
     (["llm.batch_size=0"], "llm.batch_size must be >= 1, got 0"),
+    (["search.steady_queue=1"], "search.steady_queue needs search.steady_state=true (without it, batches queue: search.queue_size)"),
     (["llm=openai", "search.steady_state=true"], "search.steady_state=true is for llm=mutate, whose answers take no time: with llm=openai"),
     (["executor.timeout_s=-1"], "executor.timeout_s must be > 0, got -1.0"),
     (["task.spec=missing_spec.py"], "spec file not found: 'missing_spec.py'"),

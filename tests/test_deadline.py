@@ -53,12 +53,12 @@ def constants(code: str) -> list[float]:
     return [node.value for node in ast.walk(ast.parse(code)) if isinstance(node, ast.Constant) and isinstance(node.value, float)]
 
 
-@pytest.mark.parametrize("drawing", ["search.steady_state=false", "search.steady_state=true"])
+@pytest.mark.parametrize("drawing", ["search.steady_state=false", "search.steady_state=true", "search.steady_state=true search.steady_queue=1"])
 def test_a_time_limit_stops_tuning_in_flight_and_keeps_its_programs(tmp_path, drawing):
     # Each program would take hours to tune with this budget: only the deadline ends the run.
     run = search(
         tmp_path, "pendulum", "gfo.budget=100000", "search.max_seconds=30", "executor.workers=2", "heldout.episodes=5", "finish.top=1",
-        drawing, timeout=120,
+        *drawing.split(), timeout=120,
     )
     assert run.summary["stop_reason"] == "max_seconds"
     cut_short = [s for s in run.samples if s["cut_short"]]

@@ -43,3 +43,14 @@ def test_with_one_worker_a_steady_state_run_is_a_function_of_its_seed(tmp_path):
     runs = [searched(tmp_path / name, "search.steady_state=true", "executor.workers=1", "search.max_samples=8")[1] for name in ("a", "b")]
     assert [(r.sample, r.batch, r.code, r.score) for r in runs[0]] == [(r.sample, r.batch, r.code, r.score) for r in runs[1]]
     assert set(Counter(record.batch for record in runs[0]).values()) == {1}
+
+
+def test_a_steady_queue_draws_programs_beyond_the_workers_before_those_ahead_are_in(tmp_path):
+    summary, records = searched(tmp_path / "run", "search.steady_state=true", "search.steady_queue=1", "executor.workers=1", "search.max_samples=8")
+    assert summary.stop_reason == "max_samples" and summary.samples == 8
+    # One worker and one program queued: two children at the start, then one as each is in ...
+    sizes = Counter(record.batch for record in records)
+    assert [sizes[batch] for batch in sorted(sizes)] == [2] + [1] * 6
+    # ... each drawn while the one before it is still being tuned, so never its child.
+    for earlier, later in zip(records, records[1:]):
+        assert earlier.key not in later.parent_keys

@@ -130,6 +130,11 @@ class SearchLoopConfig:
         "no time (a model's call would leave the workers idle). The mix of what a prompt shows depends on timing, so such a "
         "run is no longer a deterministic function of its seed",
     )
+    steady_queue: int = option(
+        0, "with search.steady_state: programs in flight beyond the workers' share, so that a worker that frees finds the "
+        "next candidate waiting instead of idling through its program's round trip; each is drawn before the programs "
+        "ahead of it are in",
+    )
     fill: Optional[str] = option(
         None, "mutate: while the generator's call is in flight, batches of colmo's embedded mutation of the best programs "
         "(the generator's included) keep idle workers busy, in the same islands; samples record which generator made them "
@@ -145,7 +150,11 @@ class SearchLoopConfig:
     progress_every_s: float = option(30.0, "seconds between plain progress lines when stderr is not a terminal")
 
     def __post_init__(self) -> None:
-        at_least(self, "search", max_samples=1, queue_size=1, duplicate_retries=0)
+        at_least(self, "search", max_samples=1, queue_size=1, duplicate_retries=0, steady_queue=0)
+        require(
+            self.steady_state or not self.steady_queue,
+            "search.steady_queue needs search.steady_state=true (without it, batches queue: search.queue_size)",
+        )
         require(self.fill in (None, "mutate"), f"search.fill must be null or mutate, got {self.fill!r}")
         require(self.model_share in MODEL_SHARES, f"search.model_share must be one of {', '.join(MODEL_SHARES)}, got {self.model_share!r}")
         require(
