@@ -54,3 +54,10 @@ def test_a_steady_queue_draws_programs_beyond_the_workers_before_those_ahead_are
     # ... each drawn while the one before it is still being tuned, so never its child.
     for earlier, later in zip(records, records[1:]):
         assert earlier.key not in later.parent_keys
+
+
+def test_a_program_that_takes_every_worker_has_them_to_itself(tmp_path):
+    # gfo.workers=2 on 2 workers: one program slot, so one child at a time, however many workers are idle.
+    summary, records = searched(tmp_path / "run", "search.steady_state=true", "executor.workers=2", "gfo.workers=2", "search.max_samples=6")
+    assert summary.stop_reason == "max_samples"
+    assert set(Counter(record.batch for record in records).values()) == {1}
