@@ -6,10 +6,11 @@ from the same seed, with no finish (no held-out scoring, simplification or video
 with exactly one program per worker, a worker idles each time its program's optimizer takes a
 candidate's score and asks for the next; a queued program's candidate fills that gap. The variants
 run back to back in alternating order each round (machines are noisy), and the medians are
-reported, with each variant's evaluations per second relative to steady state without a queue.
+reported, with each variant's evaluations per second relative to steady state without a queue,
+both measured from each search's first batch report to its last (not its start-up, starter or finish).
 
-    python benchmarks/steady_queue.py                                  # cheetah, 12 samples, 2 rounds
-    python benchmarks/steady_queue.py --tasks pendulum --samples 24 --rounds 3
+    python benchmarks/steady_queue.py                                  # pendulum, 24 samples, 2 rounds
+    python benchmarks/steady_queue.py --tasks pendulum cheetah --samples 24 --rounds 3
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from pathlib import Path
 from common import argument_parser, parse_arguments
 
 from colmo.cli import compose
+from colmo.record import BatchReport, SampleRecord, Summary
 from colmo.search import Search
 
 VARIANTS = {
@@ -32,18 +34,39 @@ VARIANTS = {
 QUIET = ["llm=mutate", "tracker=none", "search.progress=false", "heldout.episodes=1", "finish.top=1", "finish.render=false", "finish.simplify=false"]
 
 
+class Window:
+    """The first and the last batch report of a search: the search at full speed, without the
+    start-up, the starter's tuning (one program, alone on the workers) and the finish."""
+
+    def __init__(self) -> None:
+        self.reports: list[BatchReport] = []
+
+    def on_batch(self, report: BatchReport, records: list[SampleRecord]) -> None:
+        self.reports[1:] = [report]  # keeps the first and the latest
+
+    def on_finish(self, summary: Summary) -> None:
+        pass
+
+    def rates(self, workers: int) -> tuple[float, float]:
+        """Evaluations per second and the workers' busy fraction between the two reports."""
+        first, last = self.reports
+        seconds = last.seconds - first.seconds
+        return (last.evaluations - first.evaluations) / seconds, (last.worker_seconds - first.worker_seconds) / (seconds * workers)
+
+
 def searched(task: str, samples: int, workers: int, overrides: list[str], run_dir: Path) -> tuple[float, float]:
-    """Evaluations per second and the workers' busy fraction of one search."""
+    """Evaluations per second and the workers' busy fraction of one search, from its first batch to its last."""
     cfg = compose("search", [f"task={task}", f"search.max_samples={samples}", f"executor.workers={workers}", *QUIET, *overrides])
-    summary = Search(cfg, run_dir).run()
-    assert summary.samples == samples, (summary.stop_reason, summary.samples)
-    return summary.evaluations_per_second, summary.evaluator_busy
+    window = Window()
+    summary = Search(cfg, run_dir, observers=(window,)).run()
+    assert summary.samples == samples and len(window.reports) == 2, (summary.stop_reason, summary.samples)
+    return window.rates(workers)
 
 
 def main() -> None:
     parser = argument_parser(__doc__, rounds=2)
-    parser.set_defaults(tasks=["cheetah"])
-    parser.add_argument("--samples", type=int, default=12, help="samples a search (model calls)")
+    parser.set_defaults(tasks=["pendulum"])
+    parser.add_argument("--samples", type=int, default=24, help="samples a search (model calls)")
     parser.add_argument("--workers", type=int, default=2, help="evaluation workers")
     args = parse_arguments(parser)
     for task in args.tasks:
