@@ -45,15 +45,13 @@ def test_with_one_worker_a_steady_state_run_is_a_function_of_its_seed(tmp_path):
     assert set(Counter(record.batch for record in runs[0]).values()) == {1}
 
 
-def test_a_steady_queue_draws_programs_beyond_the_workers_before_those_ahead_are_in(tmp_path):
+def test_a_steady_queue_keeps_programs_in_flight_beyond_the_workers(tmp_path):
     summary, records = searched(tmp_path / "run", "search.steady_state=true", "search.steady_queue=1", "executor.workers=1", "search.max_samples=8")
-    assert summary.stop_reason == "max_samples" and summary.samples == 8
-    # One worker and one program queued: two children at the start, then one as each is in ...
+    assert summary.stop_reason == "max_samples" and summary.samples == 8 == sum(record.model_calls for record in records)
+    assert not [record for record in records if record.status == PENDING]
+    # One worker and one program queued: two children drawn at the start (without the queue, one), never more than two in flight.
     sizes = Counter(record.batch for record in records)
-    assert [sizes[batch] for batch in sorted(sizes)] == [2] + [1] * 6
-    # ... each drawn while the one before it is still being tuned, so never its child.
-    for earlier, later in zip(records, records[1:]):
-        assert earlier.key not in later.parent_keys
+    assert sizes[min(sizes)] == 2 and max(sizes.values()) <= 2, sizes
 
 
 def test_a_program_that_takes_every_worker_has_them_to_itself(tmp_path):
