@@ -166,7 +166,7 @@ class Search:
         steady = self.cfg.search.steady_state
         while True:
             if steady and self._model_may_call():
-                self._feed_idle_workers(self.sampler.generator, self._batch_size, self.cfg.search.steady_queue)
+                self._feed_idle_workers(self.sampler.generator, self._batch_size, programs_at_once(self.cfg, self.executor.n_workers))
             while not steady and self._model_may_call() and len(in_flight) < self.cfg.search.queue_size and self._samples_left() > 0:
                 batch = self._generate(self.sampler.generator, self._batch_size(self.cfg.llm.batch_size))
                 if batch is None:
@@ -284,13 +284,13 @@ class Search:
     def _fill(self) -> None:
         """Integrate the batches that are in, and give idle workers a batch of the filler's."""
         if self.sampler.filler is not None:
-            self._feed_idle_workers(self.sampler.filler, self._programs_that_fit)
+            self._feed_idle_workers(self.sampler.filler, self._programs_that_fit, program_slots(self.cfg, self.executor.n_workers))
 
-    def _feed_idle_workers(self, generator: Generator, batch_size: Callable[[int], int], ahead: int = 0) -> None:
-        """Integrate the batches that are in, in order, and give each free program slot (`gfo.workers` workers, and `ahead`
-        more) a child of `generator`'s, drawn from the database as it is now, as many as `batch_size(free)` allows."""
+    def _feed_idle_workers(self, generator: Generator, batch_size: Callable[[int], int], slots: int) -> None:
+        """Integrate the batches that are in, in order, and keep `slots` programs in flight: a child of `generator`'s for
+        each one missing, drawn from the database as it is now, as many as `batch_size(free)` allows."""
         self._integrate_done()
-        free = program_slots(self.cfg, self.executor.n_workers) + ahead - self.outcomes.running()
+        free = slots - self.outcomes.running()
         if free > 0 and not self._stop_requested():
             batch = self._generate(generator, batch_size(free))
             if batch is not None:
