@@ -274,6 +274,7 @@ def _simplify(
         result = simplify_program(
             executor, evaluator, heldout, record.code, cfg.gfo, options.tolerance, cfg.seed, options.max_rounds,
             batch_size, stop=lambda: _left(until) <= 0, max_seconds=options.max_seconds, hint=hint, names=names,
+            max_constants=options.max_constants,
         )
     except RunError as error:  # the best program fails where the simplifier measures it
         log.warning("best policy not simplified: %s", error)
@@ -288,5 +289,8 @@ def _simplify(
         more = f"colmo-simplify task={cfg.task.name} seed={cfg.seed} {shell_override('policy_file', run_dir / BEST_POLICY_FILE)}"
         log.warning("the simplification stopped at the finish's deadline after %d round(s); to go on: %s", result.rounds, more)
         header += f"# cut short at the finish's deadline after {result.rounds} round(s); to go on: {more}\n"
+    if not result.within_budget:
+        log.warning("the simplified policy keeps %d constants, over simplify.max_constants=%d", size.params, options.max_constants)
+        header += f"# over the constant budget: {size.params} constants, simplify.max_constants={options.max_constants}\n"
     (run_dir / SIMPLIFIED_POLICY_FILE).write_text(header + result.code + "\n")
     return result.to_json()

@@ -72,7 +72,7 @@ def test_a_time_limit_stops_tuning_in_flight_and_keeps_its_programs(tmp_path, dr
 
 def test_a_short_run_ends_within_5_s_of_its_limit_with_everything_it_promises(tmp_path):
     limit = 60  # under load, the start of the process and the starter's calibration take half of it
-    run = search(tmp_path, "pendulum", f"search.max_seconds={limit}", "gfo.budget=10", "executor.workers=2", timeout=600)
+    run = search(tmp_path, "pendulum", f"search.max_seconds={limit}", "gfo.budget=10", "executor.workers=2", "simplify.max_constants=0", timeout=600)
     assert run.wall <= limit + 5, f"the run took {run.wall:.1f} s"
     assert re.search(r"estimated duration: search \S+ .* limit that binds: max_seconds=60", run.stderr), run.stderr[-3000:]
     for name in (BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, PLOT_FILE, VIDEO_FILE):
@@ -83,6 +83,10 @@ def test_a_short_run_ends_within_5_s_of_its_limit_with_everything_it_promises(tm
     header = (run.run_dir / SIMPLIFIED_POLICY_FILE).read_text().split("\nimport", 1)[0]
     go_on = f"to go on: colmo-simplify task=pendulum seed=0 policy_file={run.run_dir / BEST_POLICY_FILE}"
     assert (go_on in header) is run.summary["simplified"]["cut_short"], (header, run.summary["simplified"])
+    # ... and one that kept more constants than simplify.max_constants allows says that too.
+    assert run.summary["simplified"]["max_constants"] == 0
+    over = "over the constant budget" in header
+    assert over is (not run.summary["simplified"]["within_budget"]) is (run.summary["simplified"]["n_params"] > 0), header
 
 
 def test_each_job_of_a_sweep_searches_for_its_whole_limit(tmp_path):

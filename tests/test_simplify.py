@@ -14,6 +14,7 @@ import ast
 import json
 import math
 import os
+import re
 import signal
 from pathlib import Path
 
@@ -30,6 +31,7 @@ from colmo.simplify import (
     Scores,
     Scoring,
     SimplifyResult,
+    Step,
     deletion_candidates,
     remove_dead_code,
     simplify,
@@ -96,6 +98,7 @@ def test_dead_code_second_return_unused_assignment_and_literal_call_are_removed_
 import numpy as np
 import math
 import os
+import re
 import signal
 
 def helper(x):
@@ -249,6 +252,7 @@ def policy(obs):
     """
 import math
 import os
+import re
 import signal
 def policy(obs):
     try:
@@ -636,6 +640,60 @@ def test_batching_chooses_as_one_batch_does():
     assert max(batches[1:]) <= 2 and chunked.programs_scored <= whole.programs_scored  # the first: original and cleaned
 
 
+
+def _tuned_terms(code: str) -> set[str]:
+    """The terms `c * obs[i]` of `code` that keep their constant."""
+    return {f"obs[{i}]" for i in re.findall(r"\d+\.\d+ \* obs\[(\d)\]", code)}
+
+
+def test_a_constant_budget_deletes_what_loses_least_per_constant_removed():
+    code = "def policy(obs):\n    return 2.0 * obs[0] + 2.0 * obs[1] + 2.0 * obs[2]"
+
+    def score(code: str) -> Scores:  # obs[0]'s and obs[1]'s terms cancel: one without the other costs 50
+        terms = _tuned_terms(code)
+        pair = len(terms & {"obs[0]", "obs[1]"})
+        value = 100.0 - 2.0 * ("obs[2]" not in terms) - 3.0 * (pair == 0) - 50.0 * (pair == 1)
+        return Scores(value, value)
+
+    def budget_steps(result: SimplifyResult) -> list[Step]:
+        return [step for step in result.steps if step.description.endswith("(for the constant budget)")]
+
+    within = simplify(code, scoring(lambda codes: [score(c) for c in codes]), tolerance=0.01)
+    assert within.code == code and within.within_budget  # every deletion costs more than 1%, and there is no budget
+    # Two constants to go: the pair's term (3.0 lost, 1.5 a constant), not obs[2]'s (2.0 for one).
+    one = simplify(code, scoring(lambda codes: [score(c) for c in codes]), tolerance=0.01, max_constants=1)
+    assert [_tuned_terms(step.code) for step in budget_steps(one)] == [{"obs[2]"}]
+    assert one.scores == Scores(97.0, 97.0) and one.within_budget and one.size.params == 1
+    # One constant to go: the pair's second constant earns nothing, so obs[2]'s term goes.
+    two = simplify(code, scoring(lambda codes: [score(c) for c in codes]), tolerance=0.01, max_constants=2)
+    assert [_tuned_terms(step.code) for step in budget_steps(two)] == [{"obs[0]", "obs[1]"}]
+    assert two.scores == Scores(98.0, 98.0) and two.to_json()["max_constants"] == 2 and two.to_json()["within_budget"] is True
+
+
+def test_after_a_constant_budget_the_retuning_is_judged_against_the_budgets_program():
+    code = "def policy(obs):\n    return 2.0 * obs[0] + 2.0 * obs[1] + 2.0 * obs[2]"
+
+    def score(code: str) -> Scores:  # a term earns its weight times c / 3, at most its weight
+        found = re.findall(r"(\d+\.\d+) \* obs\[(\d)\]", code)
+        value = sum({"0": 10.0, "1": 30.0, "2": 60.0}[i] * min(1.0, float(c) / 3.0) for c, i in found)
+        return Scores(value, value)
+
+    def retune(code: str) -> str:  # every constant to 3.0: each term's best
+        return _scale_constants(code, 1.5)
+
+    result = simplify(code, scoring(lambda codes: [score(c) for c in codes]), retune=retune, tolerance=0.01, max_constants=1)
+    assert [step.scores.train for step in result.steps] == pytest.approx([60.0, 40.0, 60.0])  # 66.7 at first
+    # 60.0 is 10% below the original's 66.7, but above the 40.0 the budget left: kept.
+    assert result.retuned and _same(result.code, "def policy(obs):\n    return 3.0 * obs[2]") and result.within_budget
+
+
+def test_a_budget_no_deletion_can_meet_is_reported_as_missed():
+    result = simplify("def policy(obs):\n    return 0.5", scoring(lambda codes: [Scores(1.0, 1.0) for _ in codes]), max_constants=0)
+    assert result.size.params == 1 and not result.within_budget and result.to_json()["within_budget"] is False
+    with pytest.raises(ValueError, match="max_constants must be >= 0"):
+        simplify(SUM_OF_TERMS, scoring(lambda codes: [Scores(1.0, 1.0) for _ in codes]), max_constants=-1)
+
+
 # --- the pendulum winner, measured -------------------------------------------------------------------
 
 
@@ -812,6 +870,23 @@ def test_the_command_line_simplifies_a_policy_file(tmp_path):
     assert json.loads((written.parent / "result.json").read_text())["code"] == summary["code"]
 
 
+def test_the_command_line_meets_a_constant_budget(tmp_path):
+    from conftest import last_json_line, run_colmo
+
+    policy_file = tmp_path / "policy.py"
+    policy_file.write_text(DEAD_CODE_POLICY)
+    result = run_colmo(
+        "colmo.simplify", f"policy_file={policy_file}", "task=pendulum", "+task.env.horizon=200", "task.episodes=2",
+        "heldout.episodes=2", "gfo.budget=6", "executor.workers=2", "simplify.max_constants=1", cwd=tmp_path,
+    )
+    assert result.returncode == 0, result.stderr
+    summary = last_json_line(result.stdout)
+    assert summary["n_params_initial"] > 1 >= summary["n_params"] and summary["within_budget"] is True and summary["max_constants"] == 1
+    assert any(step["description"].endswith("(for the constant budget)") for step in summary["steps"])
+    (written,) = tmp_path.glob("outputs/simplify/*/*/simplified_policy.py")
+    assert "tolerance 0.01, at most 1 constants" in written.read_text().splitlines()[0]
+
+
 def test_the_command_line_config_composes_and_checks_the_tolerance():
     import importlib
 
@@ -822,8 +897,11 @@ def test_the_command_line_config_composes_and_checks_the_tolerance():
     importlib.import_module("colmo.simplify.__main__")  # registers the command's root schema
     cfg = compose("simplify", "policy_file=p.py", "task=cheetah", "gfo=none", "simplify.tolerance=0.05")
     assert (cfg.task.name, cfg.gfo.method, cfg.simplify.tolerance, cfg.heldout.episodes) == ("cheetah", "none", 0.05, 100)
+    assert cfg.simplify.max_constants is None and compose("simplify", "policy_file=p.py", "simplify.max_constants=10").simplify.max_constants == 10
     with pytest.raises(ConfigError, match=r"simplify.tolerance must be in \[0, 1\), got 1.5"):
         compose("simplify", "policy_file=p.py", "simplify.tolerance=1.5")
+    with pytest.raises(ConfigError, match=r"simplify.max_constants must be >= 0 or null, got -1"):
+        compose("simplify", "policy_file=p.py", "simplify.max_constants=-1")
 
 
 def chained_assignments(statements: int) -> str:

@@ -95,9 +95,14 @@ class SimplifyConfig:
     max_seconds: Optional[float] = option(
         600.0, "stop after this many seconds with the shortest program so far (a search's finish also stops at its own deadline); null: no limit",
     )
+    max_constants: Optional[int] = option(
+        None, "a budget of tunable constants: past the tolerance, delete what loses the least score per constant until the program "
+        "has at most this many, then re-tune (the loss is reported); null: no budget",
+    )
 
     def __post_init__(self) -> None:
         require(0 <= self.tolerance < 1, f"simplify.tolerance must be in [0, 1), got {self.tolerance}")
+        require(self.max_constants is None or self.max_constants >= 0, f"simplify.max_constants must be >= 0 or null, got {self.max_constants}")
         require(self.max_seconds is None or self.max_seconds > 0, f"simplify.max_seconds must be > 0 or null, got {self.max_seconds}")
         at_least(self, "simplify", max_rounds=0)
         require(self.batch_size is None or self.batch_size >= 1, f"simplify.batch_size must be >= 1 or null, got {self.batch_size}")

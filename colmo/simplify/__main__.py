@@ -8,7 +8,9 @@ before and after (AST nodes, lines, parameters); the last line of stdout is one 
 and says where. Before the first deletion it counts what each branch of the policy did over the
 training and held-out episodes (`colmo.coverage`) and tries the policy without the branches it
 never took. `simplify.tolerance` is the share of the training score a deletion may cost;
-`gfo=none` skips the final re-tuning. Ctrl-C (or SIGTERM) stops it at its next step with the
+`simplify.max_constants=K` goes on deleting, past the tolerance, what loses the least score per
+constant until at most K tunable constants are left (the report says what that cost, and
+`within_budget` whether it got there); `gfo=none` skips the final re-tuning. Ctrl-C (or SIGTERM) stops it at its next step with the
 simplification so far, written and reported as above (`"interrupted": true`, exit 130); a second
 one quits.
 """
@@ -40,6 +42,10 @@ def _score(value: float) -> str:
     return f"{value:.2f}" if value != float("-inf") else "failed"
 
 
+def _budget(max_constants: Optional[int]) -> str:
+    return "" if max_constants is None else f", at most {max_constants} constants"
+
+
 def _report(result: SimplifyResult, episodes: int, heldout_episodes: int) -> str:
     before, after = result.size_initial, result.size
     lines = [
@@ -53,6 +59,8 @@ def _report(result: SimplifyResult, episodes: int, heldout_episodes: int) -> str
         f"size: {before.nodes} -> {after.nodes} AST nodes, {before.lines} -> {after.lines} lines, {before.params} -> {after.params} parameters "
         f"({result.programs_scored} programs scored, {result.seconds:.1f} s)",
     ]
+    if not result.within_budget:
+        lines.append(f"over the constant budget: {after.params} constants left, simplify.max_constants={result.max_constants}")
     return "\n".join(lines)
 
 
@@ -91,13 +99,14 @@ def main(cfg: SimplifyAppConfig) -> None:
     with stop_signals(interruption), policy_session(cfg) as session:
         evaluator, heldout = session.evaluator, session.heldout(cfg.heldout.episodes)
         log.info(
-            "%s: simplifying with tolerance %g on %d training and %d held-out episodes, gfo=%s",
-            cfg.policy_file, cfg.simplify.tolerance, len(evaluator.seeds), len(heldout.seeds), cfg.gfo.method,
+            "%s: simplifying with tolerance %g%s on %d training and %d held-out episodes, gfo=%s", cfg.policy_file, cfg.simplify.tolerance,
+            _budget(cfg.simplify.max_constants), len(evaluator.seeds), len(heldout.seeds), cfg.gfo.method,
         )
         hint = _untaken_branches(session, code, replace(evaluator, seeds=evaluator.seeds + heldout.seeds))
         result = simplify_program(
             session.executor, evaluator, heldout, code, cfg.gfo, cfg.simplify.tolerance, cfg.seed, cfg.simplify.max_rounds, cfg.simplify.batch_size,
             stop=interruption.asked, max_seconds=cfg.simplify.max_seconds, hint=hint, names=session.spec.observation_names,
+            max_constants=cfg.simplify.max_constants,
         )
 
     print(_report(result, len(evaluator.seeds), len(heldout.seeds)))
@@ -107,7 +116,8 @@ def main(cfg: SimplifyAppConfig) -> None:
         "branches_never_taken": hint.branches if hint else 0, "interrupted": interruption.asked(),
     }
     header = (
-        f"# simplified by colmo-simplify (tolerance {cfg.simplify.tolerance:g}, gfo={cfg.gfo.method}) from {cfg.policy_file}:\n"
+        f"# simplified by colmo-simplify (tolerance {cfg.simplify.tolerance:g}{_budget(cfg.simplify.max_constants)}, gfo={cfg.gfo.method}) "
+        f"from {cfg.policy_file}:\n"
         f"# training score {_score(result.scores_initial.train)} -> {_score(result.scores.train)}, "
         f"held-out {_score(result.scores_initial.heldout)} -> {_score(result.scores.heldout)}; "
         f"{result.size_initial.nodes} -> {result.size.nodes} AST nodes\n"

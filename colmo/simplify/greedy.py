@@ -15,7 +15,13 @@ GFO), so this module never executes policy code.
    decide between candidates that pass on the training episodes, so only those are scored on
    the held-out episodes, best first, until one is accepted. The choice is the same as if
    every candidate had been scored on every episode.
-3. `retune` re-tunes the constants of the result; the re-tuned code is kept if its training
+3. With a constant budget (`max_constants`) the program still holds more tunable constants,
+   deletions go on past the tolerance: round after round, the candidate with fewer constants
+   that loses the least training score per constant it removes (constants removed beyond the
+   budget earn nothing) is kept, until the budget is met or no deletion removes a constant. Its
+   losses are what the budget costs; the result says whether the budget was met, and the rule
+   below is measured from here on against this program's scores.
+4. `retune` re-tunes the constants of the result; the re-tuned code is kept if its training
    score is higher and its held-out gap passes the rule below.
 
 The acceptance rule
@@ -116,6 +122,12 @@ class SimplifyResult:
     static_pass_confirmed: bool  # False: the cleaned program scored differently, so it was not used
     retuned: bool  # the re-tuned code scored better and was kept
     seconds: float
+    max_constants: Optional[int] = None  # the constant budget (None: no budget)
+
+    @property
+    def within_budget(self) -> bool:
+        """The program holds at most `max_constants` tunable constants (always, without a budget)."""
+        return self.max_constants is None or self.size.params <= self.max_constants
 
     def to_json(self) -> dict[str, Any]:
         """The report's fields; sizes are AST node counts; non-finite scores are None (JSON has
@@ -140,6 +152,8 @@ class SimplifyResult:
             "cut_short": self.cut_short,
             "static_pass_confirmed": self.static_pass_confirmed,
             "retuned": self.retuned,
+            "max_constants": self.max_constants,
+            "within_budget": self.within_budget,
             "seconds": round(self.seconds, 3),
         }
 
@@ -206,9 +220,11 @@ def simplify(
     stop: Callable[[], bool] = lambda: False,
     hint: Optional[Pruned] = None,
     names: Sequence[str] = (),
+    max_constants: Optional[int] = None,
 ) -> SimplifyResult:
     """Simplify `code` (module docstring) and report what it cost. `stop()` is asked before each
     round, between a round's batches and before re-tuning; once it says so, the best program so far is the result.
+    `max_constants`: the constant budget (step 3 of the module docstring; None: none).
     `hint`: the program without the branches it never took (`colmo.coverage.prune`), known
     before any trial, tried first under the same rule. `names`: the spec's observation names;
     a variable whose name contradicts them is renamed last (`colmo.names.renamed`: nothing to score).
@@ -217,6 +233,8 @@ def simplify(
         raise ValueError(f"tolerance must be in [0, 1), got {tolerance}")
     if batch_size is not None and batch_size < 1:
         raise ValueError(f"batch_size must be positive, got {batch_size}")
+    if max_constants is not None and max_constants < 0:
+        raise ValueError(f"max_constants must be >= 0, got {max_constants}")
     start = time.perf_counter()
     scorer = _Scorer(scoring)
     cleaned = remove_dead_code(code, function_name)
@@ -251,6 +269,21 @@ def simplify(
         steps.append(Step(candidate.description, current, scores, measure(current)))
         log.info("round %d: %d nodes, training %.2f, held-out %.2f: %s", rounds, candidate.nodes, scores.train, scores.heldout, candidate.description)
 
+    over_budget = max_constants is not None and measure(current).params > max_constants
+    while over_budget and not stop():
+        rounds += 1
+        constants = measure(current).params
+        choice = _cheapest_constant_cut(deletion_candidates(current, function_name, stop), scorer, scores, constants, max_constants, batch_size, stop)
+        if choice is None:
+            log.info("round %d: no deletion removes a constant; %d constants left", rounds, constants)
+            break
+        candidate, scores = choice
+        current = candidate.code
+        steps.append(Step(f"{candidate.description} (for the constant budget)", current, scores, measure(current)))
+        log.info("round %d: %d constants, training %.2f, held-out %.2f: %s", rounds, steps[-1].size.params, scores.train, scores.heldout, candidate.description)
+        rule = _Rule(scores, tolerance)  # the budget's program is the reference from here on
+        over_budget = steps[-1].size.params > max_constants
+
     cut_short = stop()
     retuned = False
     if retune is not None and not cut_short and parametrize(current, function_name).n_params:
@@ -278,7 +311,7 @@ def simplify(
         code_initial=code, code=current, scores_initial=scores_initial, scores=scores,
         size_initial=measure(code), size=size, steps=tuple(steps),
         programs_scored=len(scorer.train_scores), heldout_scored=len(scorer.heldout_scores), rounds=rounds, cut_short=cut_short,
-        static_pass_confirmed=confirmed, retuned=retuned, seconds=time.perf_counter() - start,
+        static_pass_confirmed=confirmed, retuned=retuned, seconds=time.perf_counter() - start, max_constants=max_constants,
     )
 
 
@@ -316,3 +349,30 @@ def _best_deletion(
             if rule.accepts(scores):
                 best = (key, candidate, scores)
     return None if best is None else (best[1], best[2])
+
+
+def _cheapest_constant_cut(
+    candidates: list[Candidate], scorer: _Scorer, now: Scores, constants_now: int, max_constants: int, batch_size: Optional[int],
+    stop: Callable[[], bool] = lambda: False,
+) -> Optional[tuple[Candidate, Scores]]:
+    """Of the candidates with fewer tunable constants than `constants_now`, the one losing the
+    least training score against `now` per constant removed, counting none removed beyond
+    `max_constants` (then the smaller program, then the first); None if no such candidate runs.
+    Once `stop()` says so, the best of the batches scored so far."""
+    needed = constants_now - max_constants
+    cuts = [(i, c, min(needed, constants_now - measure(c.code).params)) for i, c in enumerate(candidates)]
+    cuts = [cut for cut in cuts if cut[2] > 0]
+    best: Optional[tuple[tuple[float, int, int], Candidate, float]] = None
+    step = batch_size or max(1, len(cuts))
+    for start in range(0, len(cuts), step):
+        if start and stop():
+            break
+        chunk = cuts[start : start + step]
+        for (i, candidate, removed), train in zip(chunk, scorer.train([c.code for _, c, _ in chunk])):
+            key = ((now.train - train) / removed, candidate.nodes, i)
+            if math.isfinite(train) and (best is None or key < best[0]):
+                best = (key, candidate, train)
+    if best is None:
+        return None
+    _, candidate, train = best
+    return candidate, Scores(train, scorer.heldout([candidate.code])[0])

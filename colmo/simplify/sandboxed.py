@@ -104,6 +104,7 @@ def simplify_program(
     max_seconds: Optional[float] = None,
     hint: Optional[Pruned] = None,
     names: Sequence[str] = (),
+    max_constants: Optional[int] = None,
 ) -> SimplifyResult:
     """Simplify a policy program of a task: dead code out, constants folded, deletions that cost
     at most `tolerance` of the training score (and do not widen the held-out gap by more), and
@@ -116,7 +117,8 @@ def simplify_program(
     number of candidates per executor call (None: `BATCH_PER_WORKER` per worker); `max_rounds`
     `stop()` (a search's deadline) and `max_seconds` (from now) cut the greedy search short,
     keeping the best program so far; `hint` is tried first and variables that contradict the
-    spec's observation `names` are renamed last (`colmo.simplify.greedy.simplify`).
+    spec's observation `names` are renamed last; `max_constants`: a budget of tunable constants met
+    by deletions past the tolerance (`colmo.simplify.greedy.simplify`).
 
     Its callers: the finish of a search, on its best program before the executor closes, with
     `stop` at the finish's deadline (`colmo.finish`), and `colmo-simplify` on a policy file
@@ -132,6 +134,8 @@ def simplify_program(
     retune = gfo_retune(executor, train_evaluator, gfo_cfg, seed, stop) if tunes_constants(gfo_cfg) else None
     batch_size = batch_size or BATCH_PER_WORKER * executor.n_workers
     try:
-        return simplify(code, Scoring(train, heldout), retune, tolerance, max_rounds, batch_size, stop=stop, hint=hint, names=names)
+        return simplify(
+            code, Scoring(train, heldout), retune, tolerance, max_rounds, batch_size, stop=stop, hint=hint, names=names, max_constants=max_constants,
+        )
     except ProgramFails:
         raise RunError(f"the policy fails on the training episodes: {train.failures.get(code, 'no score')}") from None
