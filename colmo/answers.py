@@ -39,12 +39,13 @@ class Answer:
 
 @dataclass(frozen=True)
 class AnswerReader:
-    """Reads answers as one run does: the spec's allowed imports, the size limit
-    (`database.max_nodes`), and programs told apart by structure (with GFO) or not."""
+    """Reads answers as one run does: the spec's allowed imports, the size limits
+    (`database.max_nodes`, `database.max_constants`), and programs told apart by structure (with GFO) or not."""
 
     allowed_imports: Sequence[str]
     max_nodes: Optional[int]
     by_structure: bool
+    max_constants: Optional[int] = None
 
     def identified(self, program: ParametricProgram) -> ParametricProgram:
         """With GFO, programs that differ only in constants are one; with gfo=none, each set of constants is a program."""
@@ -58,7 +59,9 @@ class AnswerReader:
         """The program of an answer, or why none could be read (a chat answer may call what its
         prompt showed, `Generation.shown`)."""
         try:
-            return self.identified(read_program(generation.text, self.allowed_imports, generation.prefix, self.max_nodes, generation.shown))
+            return self.identified(
+                read_program(generation.text, self.allowed_imports, generation.prefix, self.max_nodes, generation.shown, self.max_constants),
+            )
         except (Unusable, ForbiddenProgram) as error:
             return error
 

@@ -53,11 +53,13 @@ def nesting(text: str) -> int:
 
 def read_program(
     text: str, allowed_imports: Sequence[str], prefix: str = "", max_nodes: Optional[int] = None, shown: str = "",
+    max_constants: Optional[int] = None,
 ) -> ParametricProgram:
     """The checked parametric program in a generator's output (module docstring); for a
     completion, `prefix` is the prompt text it continues, for a chat answer `shown` the code
     its prompt showed (both colmo's own, so not bounded). A program bigger than `max_nodes`
-    AST nodes (`database.max_nodes`: readability) is refused."""
+    AST nodes (`database.max_nodes`), or with more than `max_constants` tunable constants
+    (`database.max_constants`), is refused: readability."""
     if len(text) > MAX_ANSWER_CHARS:
         raise Unusable(f"the output has {len(text)} characters, more than the {MAX_ANSWER_CHARS} allowed")
     not_text = _NOT_TEXT.search(text)
@@ -83,6 +85,8 @@ def read_program(
         nodes = measure(instantiate(program.skeleton, program.values)).nodes
         if nodes > max_nodes:
             raise ForbiddenProgram(f"too large: {nodes} AST nodes (database.max_nodes={max_nodes})")
+    if max_constants is not None and program.n_params > max_constants:
+        raise ForbiddenProgram(f"too many constants: {program.n_params} tunable constants (database.max_constants={max_constants})")
     return program
 
 

@@ -27,6 +27,7 @@ CASES = [
     (["gfo.budget=ten"], "Value 'ten' of type 'str' could not be converted to Integer"),
     (["task.episodes=0"], "task.episodes must be >= 1, got 0"),
     (["database.num_islands=0"], "database.num_islands must be >= 1, got 0"),
+    (["database.max_constants=-1"], "database.max_constants must be >= 0, got -1"),
     (["llm.batch_size=0"], "llm.batch_size must be >= 1, got 0"),
     (["search.steady_queue=1"], "search.steady_queue needs search.steady_state=true (without it, batches queue: search.queue_size)"),
     (["llm=openai", "search.steady_state=true"], "search.steady_state=true is for llm=mutate, whose answers take no time: with llm=openai"),

@@ -663,3 +663,14 @@ def test_a_name_the_answer_binds_is_never_taken_from_the_shown_code():
     namespace: dict = {}
     exec(extracted, namespace)
     assert namespace["policy"]([0.0, math.pi / 2, 0.0]) == pytest.approx(-2.0)
+
+
+def test_the_size_caps_refuse_a_program_with_more_nodes_or_constants():
+    from colmo.sandbox.check import ForbiddenProgram
+
+    code = "import numpy as np\n\ndef policy(obs):\n    return 1.5 * obs[0] - 0.5 * obs[1] + 0.25 * obs[2]\n"
+    assert read_program(code, ("numpy",), max_constants=3, max_nodes=22).n_params == 3
+    with pytest.raises(ForbiddenProgram, match=r"^too many constants: 3 tunable constants \(database.max_constants=2\)$"):
+        read_program(code, ("numpy",), max_constants=2)
+    with pytest.raises(ForbiddenProgram, match=r"^too large: 22 AST nodes \(database.max_nodes=21\)$"):
+        read_program(code, ("numpy",), max_nodes=21)

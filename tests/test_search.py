@@ -59,6 +59,18 @@ def test_small_search_end_to_end(tmp_path):
     assert f"(load {summary['load']:.1f} on {os.cpu_count()} CPUs)" in result.stdout
 
 
+
+def test_programs_over_the_size_caps_are_refused_before_they_are_evaluated(tmp_path):
+    result = run_colmo("colmo", "llm=mutate", "search.max_samples=40", "database.max_constants=3", "database.max_nodes=40", *TINY, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    records = [record for record in ProgramStore(next(tmp_path.glob("outputs/pendulum/*")) / "programs.db").records() if record.sample >= 0]
+    evaluated = [record for record in records if record.status == "evaluated"]
+    assert evaluated and all(record.n_params <= 3 and record.nodes <= 40 for record in evaluated)
+    refused = [record.failure for record in records if record.status == "failed"]
+    assert any(f.startswith("too many constants: ") and f.endswith(" tunable constants (database.max_constants=3)") for f in refused), refused
+    assert all(record.evaluations == 0 for record in records if record.status == "failed")
+
+
 def test_same_seed_same_search(tmp_path):
     def run(directory):
         cfg = compose("search", "search.max_samples=8", "seed=5", *TINY)

@@ -25,6 +25,9 @@ class DatabaseConfig:
     length_temperature: float = option(1.0, "within a cluster, shorter programs are preferred")
     size_penalty: float = option(0.0, "clusters are drawn by score minus this many points per AST node of their smallest program")
     max_nodes: Optional[int] = option(None, "programs bigger than this many AST nodes are refused before they are evaluated; null: no cap")
+    max_constants: Optional[int] = option(
+        None, "programs with more tunable constants than this are refused before they are evaluated (the starter excepted); null: no cap",
+    )
     shown_as_run: bool = option(
         True, "prompts show each program without the branches its final scoring never took (the referee's child counts "
         "them: colmo.coverage); false: as stored",
@@ -39,6 +42,7 @@ class DatabaseConfig:
         require(self.reset_every >= 0, f"database.reset_every must be >= 0 (0 = never), got {self.reset_every}")
         above(self, "database", cluster_temperature_init=0, length_temperature=0)
         require(self.max_nodes is None or self.max_nodes >= 1, f"database.max_nodes must be >= 1, got {self.max_nodes}")
+        require(self.max_constants is None or self.max_constants >= 0, f"database.max_constants must be >= 0, got {self.max_constants}")
         require(self.max_shown_nodes is None or self.max_shown_nodes >= 1, f"database.max_shown_nodes must be >= 1, got {self.max_shown_nodes}")
 
 
