@@ -687,6 +687,21 @@ def test_after_a_constant_budget_the_retuning_is_judged_against_the_budgets_prog
     assert result.retuned and _same(result.code, "def policy(obs):\n    return 3.0 * obs[2]") and result.within_budget
 
 
+def test_after_a_constant_budget_the_deletions_go_on_within_the_tolerance_of_the_budgets_program():
+    code = "import numpy as np\n\ndef policy(obs):\n    return 2.0 * obs[0] + 2.0 * obs[1] + np.tanh(obs[2])"
+
+    def score(code: str) -> Scores:  # the tanh matters only beside obs[1]'s term
+        kept = {term: term in code for term in ("2.0 * obs[0]", "2.0 * obs[1]", "obs[2]", "tanh")}
+        value = 100.0 - 20.0 * (not kept["2.0 * obs[0]"]) - 3.0 * (not kept["2.0 * obs[1]"]) - 30.0 * (not kept["obs[2]"])
+        value -= 5.0 * (kept["2.0 * obs[1]"] and not kept["tanh"])
+        return Scores(value, value)
+
+    result = simplify(code, scoring(lambda codes: [score(c) for c in codes]), tolerance=0.01, max_constants=1)
+    assert [step.description.split(" `")[0] for step in result.steps] == ["dropped the term", "unwrapped"]
+    assert result.steps[0].description.endswith("(for the constant budget)") and not result.steps[1].description.endswith("budget)")
+    assert _same(result.code, "def policy(obs):\n    return 2.0 * obs[0] + obs[2]") and result.scores == Scores(97.0, 97.0)
+
+
 def test_a_budget_no_deletion_can_meet_is_reported_as_missed():
     result = simplify("def policy(obs):\n    return 0.5", scoring(lambda codes: [Scores(1.0, 1.0) for _ in codes]), max_constants=0)
     assert result.size.params == 1 and not result.within_budget and result.to_json()["within_budget"] is False

@@ -19,8 +19,8 @@ GFO), so this module never executes policy code.
    deletions go on past the tolerance: round after round, the candidate with fewer constants
    that loses the least training score per constant it removes (constants removed beyond the
    budget earn nothing) is kept, until the budget is met or no deletion removes a constant. Its
-   losses are what the budget costs; the result says whether the budget was met, and the rule
-   below is measured from here on against this program's scores.
+   losses are what the budget costs; the result says whether the budget was met. From here on
+   the rule below is measured against this program's scores, and step 2 goes on from it.
 4. `retune` re-tunes the constants of the result; the re-tuned code is kept if its training
    score is higher and its held-out gap passes the rule below.
 
@@ -256,33 +256,26 @@ def simplify(
             current, scores = hinted, hinted_scores
             steps.append(Step(hint.description, current, scores, hinted_size))
 
-    rounds = 0
-    while rounds < max_rounds and not stop():
-        rounds += 1
-        candidates = deletion_candidates(current, function_name, stop)
-        choice = _best_deletion(candidates, scorer, rule, batch_size, stop)
-        if choice is None:
-            log.info("round %d: none of %d deletions is acceptable", rounds, len(candidates))
-            break
-        candidate, scores = choice
-        current = candidate.code
-        steps.append(Step(candidate.description, current, scores, measure(current)))
-        log.info("round %d: %d nodes, training %.2f, held-out %.2f: %s", rounds, candidate.nodes, scores.train, scores.heldout, candidate.description)
-
-    over_budget = max_constants is not None and measure(current).params > max_constants
-    while over_budget and not stop():
-        rounds += 1
-        constants = measure(current).params
-        choice = _cheapest_constant_cut(deletion_candidates(current, function_name, stop), scorer, scores, constants, max_constants, batch_size, stop)
-        if choice is None:
-            log.info("round %d: no deletion removes a constant; %d constants left", rounds, constants)
-            break
-        candidate, scores = choice
-        current = candidate.code
-        steps.append(Step(f"{candidate.description} (for the constant budget)", current, scores, measure(current)))
-        log.info("round %d: %d constants, training %.2f, held-out %.2f: %s", rounds, steps[-1].size.params, scores.train, scores.heldout, candidate.description)
-        rule = _Rule(scores, tolerance)  # the budget's program is the reference from here on
-        over_budget = steps[-1].size.params > max_constants
+    current, scores, rounds = _deletion_rounds(current, scores, steps, scorer, rule, max_rounds, batch_size, function_name, stop)
+    if max_constants is not None and measure(current).params > max_constants:
+        cuts = 0
+        while not stop():
+            constants = measure(current).params
+            choice = _cheapest_constant_cut(deletion_candidates(current, function_name, stop), scorer, scores, constants, max_constants, batch_size, stop)
+            rounds += 1
+            if choice is None:
+                log.info("round %d: no deletion removes a constant; %d constants left", rounds, constants)
+                break
+            candidate, scores = choice
+            current, cuts = candidate.code, cuts + 1
+            steps.append(Step(f"{candidate.description} (for the constant budget)", current, scores, measure(current)))
+            log.info("round %d: %d constants, training %.2f: %s", rounds, steps[-1].size.params, scores.train, candidate.description)
+            if steps[-1].size.params <= max_constants:
+                break
+        if cuts:  # the budget's program is the reference from here on
+            rule = _Rule(scores, tolerance)
+            current, scores, more = _deletion_rounds(current, scores, steps, scorer, rule, max_rounds - rounds, batch_size, function_name, stop)
+            rounds += more
 
     cut_short = stop()
     retuned = False
@@ -322,6 +315,27 @@ def readable_constants(code: str, function_name: str = "policy") -> str:
     if round_significant(program.values) == tuple(program.values):  # already as readable (or none)
         return code
     return instantiate(program.skeleton, program.values, digits=DISPLAY_DIGITS)
+
+
+def _deletion_rounds(
+    current: str, scores: Scores, steps: list[Step], scorer: _Scorer, rule: _Rule, max_rounds: int, batch_size: Optional[int],
+    function_name: str, stop: Callable[[], bool],
+) -> tuple[str, Scores, int]:
+    """Step 2 of the module docstring from `current`: the program, its scores and the rounds run;
+    each accepted deletion is appended to `steps`."""
+    rounds = 0
+    while rounds < max_rounds and not stop():
+        rounds += 1
+        candidates = deletion_candidates(current, function_name, stop)
+        choice = _best_deletion(candidates, scorer, rule, batch_size, stop)
+        if choice is None:
+            log.info("round %d: none of %d deletions is acceptable", rounds, len(candidates))
+            break
+        candidate, scores = choice
+        current = candidate.code
+        steps.append(Step(candidate.description, current, scores, measure(current)))
+        log.info("round %d: %d nodes, training %.2f, held-out %.2f: %s", rounds, candidate.nodes, scores.train, scores.heldout, candidate.description)
+    return current, scores, rounds
 
 
 def _best_deletion(
