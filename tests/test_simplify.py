@@ -864,41 +864,36 @@ def test_simplify_program_says_why_a_failing_policy_cannot_be_simplified(executo
         simplify_program(executor, train, heldout, failing, GFOConfig(method="none", budget=1))
 
 
-def test_the_command_line_simplifies_a_policy_file(tmp_path):
+def _simplified_on_short_episodes(tmp_path, option: str) -> tuple[str, dict, Path]:
+    """`colmo-simplify` on DEAD_CODE_POLICY, short pendulum episodes: its stdout, its JSON line, the policy it wrote."""
     from conftest import last_json_line, run_colmo
 
     policy_file = tmp_path / "policy.py"
     policy_file.write_text(DEAD_CODE_POLICY)
     result = run_colmo(
         "colmo.simplify", f"policy_file={policy_file}", "task=pendulum", "+task.env.horizon=200", "task.episodes=2",
-        "heldout.episodes=2", "gfo.budget=6", "executor.workers=2", "simplify.tolerance=0.01", cwd=tmp_path,
+        "heldout.episodes=2", "gfo.budget=6", "executor.workers=2", option, cwd=tmp_path,
     )
     assert result.returncode == 0, result.stderr
-    summary = last_json_line(result.stdout)
+    (written,) = tmp_path.glob("outputs/simplify/*/*/simplified_policy.py")
+    return result.stdout, last_json_line(result.stdout), written
+
+
+def test_the_command_line_simplifies_a_policy_file(tmp_path):
+    stdout, summary, written = _simplified_on_short_episodes(tmp_path, "simplify.tolerance=0.01")
     assert REPORT_KEYS <= summary.keys()
     assert summary["size"] < summary["size_initial"] and summary["lines"] < summary["lines_initial"]
     assert summary["score"] >= summary["score_initial"] - 0.01 * abs(summary["score_initial"])
-    assert summary["heldout_score"] is not None and summary["code"] in result.stdout
-    (written,) = tmp_path.glob("outputs/simplify/*/*/simplified_policy.py")
+    assert summary["heldout_score"] is not None and summary["code"] in stdout
     first, second, code = written.read_text().split("\n", 2)
     assert first.startswith("# simplified by colmo-simplify") and second.startswith("# training score") and code.strip() == summary["code"]
     assert json.loads((written.parent / "result.json").read_text())["code"] == summary["code"]
 
 
 def test_the_command_line_meets_a_constant_budget(tmp_path):
-    from conftest import last_json_line, run_colmo
-
-    policy_file = tmp_path / "policy.py"
-    policy_file.write_text(DEAD_CODE_POLICY)
-    result = run_colmo(
-        "colmo.simplify", f"policy_file={policy_file}", "task=pendulum", "+task.env.horizon=200", "task.episodes=2",
-        "heldout.episodes=2", "gfo.budget=6", "executor.workers=2", "simplify.max_constants=1", cwd=tmp_path,
-    )
-    assert result.returncode == 0, result.stderr
-    summary = last_json_line(result.stdout)
+    _, summary, written = _simplified_on_short_episodes(tmp_path, "simplify.max_constants=1")
     assert summary["n_params_initial"] > 1 >= summary["n_params"] and summary["within_budget"] is True and summary["max_constants"] == 1
     assert any(step["description"].endswith("(for the constant budget)") for step in summary["steps"])
-    (written,) = tmp_path.glob("outputs/simplify/*/*/simplified_policy.py")
     assert "tolerance 0.01, at most 1 constants" in written.read_text().splitlines()[0]
 
 
