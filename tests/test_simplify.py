@@ -419,12 +419,15 @@ def test_names_assigned_once_and_read_only_in_a_sum_are_written_in_where_that_co
         "collected the like terms of `action - 11.97 * (obs[1] - b * b) + 0.3294` with `action` written in at line 4",
         "def policy(obs):\n    b = obs[2]\n    return 0.4965 - 11.97 * (obs[1] - b * b)",  # `b`, read twice, stays
     )]
+    # A number read twice is written in twice (the constant a constant budget's cut left there).
+    twice = "def policy(obs):\n    action = 1.0\n    return action + 2.0 * np.tanh(obs[1]) + action"
+    assert [c.code for c in _collected(twice)] == ["def policy(obs):\n    return 2.0 + 2.0 * np.tanh(obs[1])"]
     blend = "def policy(obs):\n    a = 2.0 * obs[0] + obs[1]\n    a_b = obs[0] - 0.5 * obs[1]\n    return a + 1.5 * a_b"
     (collected,) = _collected(blend)
     assert collected.code == "def policy(obs):\n    return 3.5 * obs[0] + 0.25 * obs[1]"
     for kept in (
         "def policy(obs):\n    a = obs[0]\n    a = a * 2.0\n    return a + 1.0 + a",  # assigned twice
-        "def policy(obs):\n    obs = obs * 2.0\n    a = 1.0\n    return a + obs[0] + 1.0 + a",  # read twice
+        "def policy(obs):\n    obs = obs * 2.0\n    a = 0.5 * obs[1]\n    return a * obs[0] + 1.0 + 2.0 * a",  # an expression read twice
         "def policy(obs):\n    a = np.tanh(obs[0])\n    return a + 2.0 * obs[1]",  # nothing to collect
     ):
         assert not _collected(kept), kept

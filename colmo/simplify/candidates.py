@@ -11,7 +11,7 @@ of a program and its relative writes: one expression, each constant the weighted
 pair, the subexpression that differs the weighted sum of the two), collect a sum's like terms
 (`a + 1.663 * (0.3931 - b + 1.142 * b)` -> `a + 0.6537 + 0.2361 * b`, `colmo.simplify.linear`), the
 same with the names assigned once and read only in that sum written in (`a = 0.17` then
-`return a - 2.0 * x + 0.33` -> `return 0.5 - 2.0 * x`), and replace a subexpression
+`return a - 2.0 * x + 0.33` -> `return 0.5 - 2.0 * x`; a number read more than once there too), and replace a subexpression
 that no drop covers (a call argument, a compared value, an assigned or returned value, a branch)
 by 0.0 or 1.0. The last `return` of the policy is never deleted (a policy returning None always
 fails). Each candidate is cleaned by `remove_dead_code`, so what a deletion leaves dead goes
@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Optional
 
 from colmo import astutil
-from colmo.astutil import OPAQUE_FIELDS, is_number_literal, names_read, negated, node_count, number_literal, replace_nodes, strip_docstrings
+from colmo.astutil import OPAQUE_FIELDS, is_number_literal, negated, node_count, number_literal, replace_nodes, strip_docstrings
 from colmo.program import round_significant
 from colmo.simplify.deadcode import FUNCTIONS, own_statements, remove_dead_code
 from colmo.simplify.linear import collected_sum, top_of_sum
@@ -159,10 +159,15 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
                     yield node, f"collected the like terms of `{_short(node)}` at {where}", replace_with(
                         lambda n, collected=collected: copy.deepcopy(collected)
                     )
-                # A name assigned once and read only here, written in, may have terms to collect.
-                read_once = {name: single[name] for name in names_read(node) if name in single and reads[id(node)][name] == 1}
-                if read_once and (collected := collected_sum(_written_in(node, read_once))) is not None:
-                    names = ", ".join(f"`{name}`" for name in read_once)
+                # Names assigned once and read only in this sum, written in, may have terms to collect:
+                # read once, or a number read more than once (an expression is not written twice).
+                here = Counter(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load))
+                read_here = {
+                    name: single[name] for name in here
+                    if name in single and reads[id(node)][name] == here[name] and (here[name] == 1 or is_number_literal(single[name]))
+                }
+                if read_here and (collected := collected_sum(_written_in(node, read_here))) is not None:
+                    names = ", ".join(f"`{name}`" for name in read_here)
                     yield node, f"collected the like terms of `{_short(node)}` with {names} written in at {where}", replace_with(
                         lambda n, collected=collected: copy.deepcopy(collected)
                     )
