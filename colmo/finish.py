@@ -259,6 +259,13 @@ def _render(cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: S
     return found
 
 
+def _constant_budget(cfg: SearchConfig) -> Optional[int]:
+    """The simplifier's budget of constants: `simplify.max_constants`, and a search that kept only
+    programs of at most `database.max_constants` keeps its simplified policy within that too."""
+    budgets = [b for b in (cfg.simplify.max_constants, cfg.database.max_constants) if b is not None]
+    return min(budgets) if budgets else None
+
+
 def _simplify(
     cfg: SearchConfig, executor: Executor, evaluator: Evaluator, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float,
     short: bool = False, hint: Optional[Pruned] = None, names: Sequence[str] = (),
@@ -274,7 +281,7 @@ def _simplify(
         result = simplify_program(
             executor, evaluator, heldout, record.code, cfg.gfo, options.tolerance, cfg.seed, options.max_rounds,
             batch_size, stop=lambda: _left(until) <= 0, max_seconds=options.max_seconds, hint=hint, names=names,
-            max_constants=options.max_constants,
+            max_constants=_constant_budget(cfg),
         )
     except RunError as error:  # the best program fails where the simplifier measures it
         log.warning("best policy not simplified: %s", error)
@@ -290,7 +297,7 @@ def _simplify(
         log.warning("the simplification stopped at the finish's deadline after %d round(s); to go on: %s", result.rounds, more)
         header += f"# cut short at the finish's deadline after {result.rounds} round(s); to go on: {more}\n"
     if not result.within_budget:
-        log.warning("the simplified policy keeps %d constants, over simplify.max_constants=%d", size.params, options.max_constants)
-        header += f"# over the constant budget: {size.params} constants, simplify.max_constants={options.max_constants}\n"
+        log.warning("the simplified policy keeps %d constants, over the budget of %d", size.params, result.max_constants)
+        header += f"# over the constant budget: {size.params} constants, at most {result.max_constants} asked\n"
     (run_dir / SIMPLIFIED_POLICY_FILE).write_text(header + result.code + "\n")
     return result.to_json()

@@ -61,14 +61,19 @@ def test_small_search_end_to_end(tmp_path):
 
 
 def test_programs_over_the_size_caps_are_refused_before_they_are_evaluated(tmp_path):
-    result = run_colmo("colmo", "llm=mutate", "search.max_samples=40", "database.max_constants=3", "database.max_nodes=40", *TINY, cwd=tmp_path)
+    simplifying = [option for option in TINY if option != "finish.simplify=false"]
+    result = run_colmo("colmo", "llm=mutate", "search.max_samples=40", "database.max_constants=3", "database.max_nodes=40", *simplifying, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    records = [record for record in ProgramStore(next(tmp_path.glob("outputs/pendulum/*")) / "programs.db").records() if record.sample >= 0]
+    run_dir = next(tmp_path.glob("outputs/pendulum/*"))
+    records = [record for record in ProgramStore(run_dir / "programs.db").records() if record.sample >= 0]
     evaluated = [record for record in records if record.status == "evaluated"]
     assert evaluated and all(record.n_params <= 3 and record.nodes <= 40 for record in evaluated)
     refused = [record.failure for record in records if record.status == "failed"]
     assert any(f.startswith("too many constants: ") and f.endswith(" tunable constants (database.max_constants=3)") for f in refused), refused
     assert all(record.evaluations == 0 for record in records if record.status == "failed")
+    # The finish's simplifier keeps the best policy within the search's budget of constants.
+    simplified = json.loads((run_dir / "summary.json").read_text())["simplified"]
+    assert simplified["max_constants"] == 3 and simplified["n_params"] <= 3 and simplified["within_budget"] is True
 
 
 def test_same_seed_same_search(tmp_path):

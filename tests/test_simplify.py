@@ -705,6 +705,18 @@ def test_after_a_constant_budget_the_deletions_go_on_within_the_tolerance_of_the
     assert _same(result.code, "def policy(obs):\n    return 2.0 * obs[0] + obs[2]") and result.scores == Scores(97.0, 97.0)
 
 
+def test_under_a_constant_budget_no_deletion_takes_the_program_over_it():
+    # Replacing a compared value or a branch by 0.0 or 1.0 costs nothing here, but adds a constant.
+    code = "def policy(obs):\n    return 2.0 * obs[0] if obs[1] > obs[2] else obs[1]"
+
+    def score_batch(codes):
+        return [Scores(100.0, 100.0) if "2.0 * obs[0]" in c and ">" in c else Scores(0.0, 0.0) for c in codes]
+
+    assert simplify(code, scoring(score_batch)).size.params > 1
+    within = simplify(code, scoring(score_batch), max_constants=1)
+    assert within.code == code and within.within_budget and not within.steps
+
+
 def test_a_budget_no_deletion_can_meet_is_reported_as_missed():
     result = simplify("def policy(obs):\n    return 0.5", scoring(lambda codes: [Scores(1.0, 1.0) for _ in codes]), max_constants=0)
     assert result.size.params == 1 and not result.within_budget and result.to_json()["within_budget"] is False

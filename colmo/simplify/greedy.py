@@ -7,7 +7,8 @@ GFO), so this module never executes policy code.
 
 1. The original program and its `remove_dead_code` version are both scored; the clean-up is
    kept only if the scores are the same, which confirms it changed nothing.
-2. Round after round, every `deletion_candidates` of the current program is scored and the
+2. Round after round, every `deletion_candidates` of the current program (under a constant
+   budget, those that do not take it over the budget) is scored and the
    acceptable one that removes the most AST nodes is kept, until none is acceptable (or
    `max_rounds`, or `stop()`). Candidates are scored on the training episodes, largest deletion
    first, in batches of `batch_size` (None: the whole round at once); batching stops once no
@@ -256,7 +257,7 @@ def simplify(
             current, scores = hinted, hinted_scores
             steps.append(Step(hint.description, current, scores, hinted_size))
 
-    current, scores, rounds = _deletion_rounds(current, scores, steps, scorer, rule, max_rounds, batch_size, function_name, stop)
+    current, scores, rounds = _deletion_rounds(current, scores, steps, scorer, rule, max_rounds, batch_size, function_name, stop, max_constants)
     if max_constants is not None and measure(current).params > max_constants:
         cuts = 0
         while not stop():
@@ -274,7 +275,9 @@ def simplify(
                 break
         if cuts:  # the budget's program is the reference from here on
             rule = _Rule(scores, tolerance)
-            current, scores, more = _deletion_rounds(current, scores, steps, scorer, rule, max_rounds - rounds, batch_size, function_name, stop)
+            current, scores, more = _deletion_rounds(
+                current, scores, steps, scorer, rule, max_rounds - rounds, batch_size, function_name, stop, max_constants,
+            )
             rounds += more
 
     cut_short = stop()
@@ -319,14 +322,18 @@ def readable_constants(code: str, function_name: str = "policy") -> str:
 
 def _deletion_rounds(
     current: str, scores: Scores, steps: list[Step], scorer: _Scorer, rule: _Rule, max_rounds: int, batch_size: Optional[int],
-    function_name: str, stop: Callable[[], bool],
+    function_name: str, stop: Callable[[], bool], max_constants: Optional[int] = None,
 ) -> tuple[str, Scores, int]:
     """Step 2 of the module docstring from `current`: the program, its scores and the rounds run;
-    each accepted deletion is appended to `steps`."""
+    each accepted deletion is appended to `steps`. With a constant budget, no deletion takes the
+    program over it, or adds a constant to one already over it (`obs[3]` replaced by 0.0 is one more)."""
     rounds = 0
     while rounds < max_rounds and not stop():
         rounds += 1
         candidates = deletion_candidates(current, function_name, stop)
+        if max_constants is not None:
+            cap = max(max_constants, measure(current).params)
+            candidates = [c for c in candidates if measure(c.code).params <= cap]
         choice = _best_deletion(candidates, scorer, rule, batch_size, stop)
         if choice is None:
             log.info("round %d: none of %d deletions is acceptable", rounds, len(candidates))
