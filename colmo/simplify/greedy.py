@@ -259,20 +259,8 @@ def simplify(
 
     current, scores, rounds = _deletion_rounds(current, scores, steps, scorer, rule, max_rounds, batch_size, function_name, stop, max_constants)
     if max_constants is not None and measure(current).params > max_constants:
-        cuts = 0
-        while not stop():
-            constants = measure(current).params
-            choice = _cheapest_constant_cut(deletion_candidates(current, function_name, stop), scorer, scores, constants, max_constants, batch_size, stop)
-            rounds += 1
-            if choice is None:
-                log.info("round %d: no deletion removes a constant; %d constants left", rounds, constants)
-                break
-            candidate, scores = choice
-            current, cuts = candidate.code, cuts + 1
-            steps.append(Step(f"{candidate.description} (for the constant budget)", current, scores, measure(current)))
-            log.info("round %d: %d constants, training %.2f: %s", rounds, steps[-1].size.params, scores.train, candidate.description)
-            if steps[-1].size.params <= max_constants:
-                break
+        current, scores, cuts = _budget_cuts(current, scores, steps, scorer, max_constants, batch_size, function_name, stop)
+        rounds += cuts
         if cuts:  # the budget's program is the reference from here on
             rule = _Rule(scores, tolerance)
             current, scores, more = _deletion_rounds(
@@ -370,6 +358,28 @@ def _best_deletion(
             if rule.accepts(scores):
                 best = (key, candidate, scores)
     return None if best is None else (best[1], best[2])
+
+
+def _budget_cuts(
+    current: str, scores: Scores, steps: list[Step], scorer: _Scorer, max_constants: int, batch_size: Optional[int],
+    function_name: str, stop: Callable[[], bool],
+) -> tuple[str, Scores, int]:
+    """Step 3 of the module docstring from `current`: the program, its scores and the cuts made;
+    each cut is appended to `steps`."""
+    cuts = 0
+    while not stop():
+        constants = measure(current).params
+        choice = _cheapest_constant_cut(deletion_candidates(current, function_name, stop), scorer, scores, constants, max_constants, batch_size, stop)
+        if choice is None:
+            log.info("no deletion removes a constant; %d constants left", constants)
+            break
+        candidate, scores = choice
+        current, cuts = candidate.code, cuts + 1
+        steps.append(Step(f"{candidate.description} (for the constant budget)", current, scores, measure(current)))
+        log.info("cut %d: %d constants, training %.2f: %s", cuts, steps[-1].size.params, scores.train, candidate.description)
+        if steps[-1].size.params <= max_constants:
+            break
+    return current, scores, cuts
 
 
 def _cheapest_constant_cut(
