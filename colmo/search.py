@@ -95,7 +95,7 @@ class Search:
         self.generation_seconds = 0.0
         self.model_share = ModelShare(cfg.search.model_share, cfg.search.min_model_share)
         self.stop_reason = ""
-        self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, tunes_constants(cfg.gfo), cfg.database.max_constants)
+        self.reader = AnswerReader(self.spec.allowed_imports, cfg.database.max_nodes, tunes_constants(cfg.gfo), max_constants=cfg.database.max_constants)
         if self.store.key_version() != STRUCTURE_KEY_VERSION:  # a new store, or one an older colmo wrote
             rekeyed = self.store.rekey(lambda record: self.reader.key(record.skeleton, record.initial_params or ()), STRUCTURE_KEY_VERSION)
             if rekeyed:

@@ -117,7 +117,7 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
     reads: dict[int, Counter[str]] = {}  # each node's function's reads of each name (its nested functions' included)
     for function in functions:  # in walk order: a nested function's nodes end with its own
         single = single_definitions(function)
-        read = Counter(n.id for n in ast.walk(function) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load))
+        read = _loads(function)
         definitions.update((id(n), single) for n in ast.walk(function))
         reads.update((id(n), read) for n in ast.walk(function))
     for function in functions:
@@ -161,7 +161,7 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
                     )
                 # Names assigned once and read only in this sum, written in, may have terms to collect:
                 # read once, or a number read more than once (an expression is not written twice).
-                here = Counter(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load))
+                here = _loads(node)
                 read_here = {
                     name: single[name] for name in here
                     if name in single and reads[id(node)][name] == here[name] and (here[name] == 1 or is_number_literal(single[name]))
@@ -189,6 +189,11 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
         if not covered and not is_number_literal(node) and not isinstance(node, ast.Constant):
             for value in (0.0, 1.0):
                 yield node, f"replaced `{_short(node)}` by {value} at {where}", replace_with(lambda n, value=value: ast.Constant(value))
+
+
+def _loads(node: ast.AST) -> Counter[str]:
+    """How many times `node` reads each name."""
+    return Counter(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load))
 
 
 def _written_in(node: ast.expr, values: dict[str, ast.expr]) -> ast.expr:
