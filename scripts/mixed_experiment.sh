@@ -8,6 +8,7 @@
 #   steady: mutation alone drawing as the filler draws, a child per idle worker (search.steady_state=true)
 #   steady_q: steady with one program queued beyond the workers (search.steady_queue=1)
 #   by_yield_c10: by_yield keeping only programs of at most 10 tunable constants (database.max_constants=10)
+#   mutate_c10: mutation alone within the same cap
 # Seed 0 of every variant first, then seeds 1 and 2. Each run is a one-job sweep into its own
 # directory, so running this again keeps what finished and resumes the rest.
 #
@@ -17,7 +18,7 @@
 set -u
 out=$(mkdir -p "$1" && cd "$1" && pwd); shift
 tasks=${*:-pendulum cheetah}
-variants=" ${VARIANTS:-mixed mutate steady steady_q model by_yield by_yield_c10} "
+variants=" ${VARIANTS:-mixed mutate steady steady_q model by_yield by_yield_c10 mutate_c10} "
 model=$(python "$(dirname "$0")/fetch_test_model.py" --size 1.5b)
 cd "$out"
 run() {  # task variant seed overrides...
@@ -35,5 +36,6 @@ for seed in ${SEEDS:-0 1 2}; do
     if [ "$seed" = 0 ]; then run "$task" model "$seed" llm=llamacpp "llm.model_path=$model"; fi
     run "$task" by_yield "$seed" llm=llamacpp "llm.model_path=$model" search.fill=mutate search.model_share=by_yield
     run "$task" by_yield_c10 "$seed" llm=llamacpp "llm.model_path=$model" search.fill=mutate search.model_share=by_yield database.max_constants=10
+    run "$task" mutate_c10 "$seed" llm=mutate database.max_constants=10
   done
 done
