@@ -381,6 +381,33 @@ def test_a_constant_factor_is_merged_into_an_array_literal_by_a_measured_candida
         assert not [c for c in deletion_candidates(code) if c.description.startswith("merged")], kept
 
 
+def test_an_array_literal_keeps_one_entry_or_shares_one_value_by_measured_candidates():
+    # The cheetah's by_yield seed-2 winner, simplified: 12 constants, 7 of them in the second gain
+    # vector, whose entry 3 does nearly all the work; dropping the whole term loses ~170 points.
+    code = "import numpy as np\n\ndef policy(obs):\n    return obs[0] + np.array([-0.068, 0.2022, 0.0, 7.422, 0.2798, -0.1]) * obs[6]"
+    edits = {c.description: c.code for c in deletion_candidates(code) if "entry" in c.description or "shared" in c.description}
+    array = "`np.array([-0.068, 0.2022, 0.0, 7.422, 0.2798, -0.1])`"
+    assert edits[f"kept only entry 3, `7.422`, of {array} at line 4"].endswith("return obs[0] + 7.422 * np.eye(6)[3] * obs[6]")
+    assert edits[f"shared one value, their mean 1.289, across the entries of {array} at line 4"].endswith(
+        "return obs[0] + np.full(6, 1.289) * obs[6]"
+    )
+    assert not [d for d in edits if d.startswith("kept only entry 2,")]  # a 0 entry left alone is all zeros
+    assert len(edits) == 6  # five entries kept one at a time, one mean
+    # The size and index are structural: one constant left where there were six.
+    for kept in edits.values():
+        assert measure(kept).params == 1
+        assert _run_policy(kept)(np.ones(7)).shape == (6,)
+    # An entry that is an expression is kept whole; no mean where an entry is not a number.
+    mixed = "import numpy as np\n\ndef policy(obs):\n    return np.array([0.5, -2.0 * obs[1], 1.5, 0.25, 3.0]) * obs[0]"
+    edits = {c.description: c.code for c in deletion_candidates(mixed) if "entry" in c.description or "shared" in c.description}
+    assert edits["kept only entry 1, `-2.0 * obs[1]`, of `np.array([0.5, -2.0 * obs[1], 1.5, 0.25, 3.0])` at line 4"].endswith(
+        "return -2.0 * obs[1] * np.eye(5)[1] * obs[0]"
+    )
+    assert len(edits) == 5
+    # Two entries: `c * np.eye(2)[i]` is no smaller than the array, so it is not a candidate.
+    assert not [c for c in deletion_candidates("import numpy as np\n\ndef policy(obs):\n    return np.array([0.5, 2.0]) * obs[0]") if "entry" in c.description]
+
+
 def _collected(code: str) -> list[Candidate]:
     return [c for c in deletion_candidates(code) if c.description.startswith("collected the like terms")]
 

@@ -4,7 +4,10 @@
 of an `if` statement or of a conditional expression, drop a term of a sum or difference, a
 factor of a product, a divisor or an exponent, merge two constant factors (`2.0 * (3.0 * x)`
 -> `6.0 * x`, `2.0 * (np.array([1.0, 3.0]) * x)` -> `np.array([2.0, 6.0]) * x`), unwrap a call
-to one of its arguments (`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), keep one operand of
+to one of its arguments (`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), cut an array literal
+to one entry or to one value shared by all (`np.array([a, b, c])` -> `b * np.eye(3)[1]` or
+`np.full(3, mean)`: the gain vector's constants less one, where a deletion of the whole vector
+loses what its strongest entry carries), keep one operand of
 `and`/`or`, merge two terms alike but for their constants and at most one subexpression
 (`0.5 * a + 0.5 * a_b`, where `a` and `a_b` are assigned such expressions, as mutation's blend
 of a program and its relative writes: one expression, each constant the weighted mean of the
@@ -184,6 +187,8 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
             for i, argument in enumerate(node.args):
                 if not is_number_literal(argument) and not isinstance(argument, ast.Starred):
                     yield node, f"unwrapped `{_short(node)}` to `{_short(argument)}` at {where}", replace_with(lambda n, i=i: n.args[i])
+            for description, make in _array_edits(node):
+                yield node, f"{description} at {where}", replace_with(make)
         parent, name, _ = parents[id(node)]
         covered = isinstance(parent, ast.BinOp) and type(parent.op) in _DROP_SIDES and (name == "left" or type(parent.op) in (ast.Add, ast.Sub, ast.Mult))
         if not covered and not is_number_literal(node) and not isinstance(node, ast.Constant):
@@ -222,15 +227,47 @@ def _merged_literal(value: float, node: ast.AST) -> Optional[ast.expr]:
         if not math.isfinite(product):
             return None
         return number_literal(round_significant((product,))[0] if isinstance(product, float) else product)
+    listed = _array_elements(node)
+    if listed is None:
+        return None
+    elements = [_merged_literal(value, element) for element in listed]
+    if any(element is None or isinstance(element, ast.Call) for element in elements):
+        return None
+    return ast.Call(node.func, [ast.List(elements, ast.Load())], [])
+
+
+def _array_elements(node: ast.AST) -> Optional[list[ast.expr]]:
+    """The elements of `np.array([e0, e1, ...])` (`numpy.array` too, no keywords, at least one);
+    None for anything else."""
     is_array = isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "array"
     if not (is_array and isinstance(node.func.value, ast.Name) and node.func.value.id in ("np", "numpy")):
         return None
     if node.keywords or len(node.args) != 1 or not isinstance(node.args[0], ast.List) or not node.args[0].elts:
         return None
-    elements = [_merged_literal(value, element) for element in node.args[0].elts]
-    if any(element is None or isinstance(element, ast.Call) for element in elements):
-        return None
-    return ast.Call(node.func, [ast.List(elements, ast.Load())], [])
+    return node.args[0].elts
+
+
+def _array_edits(node: ast.Call) -> Iterator[tuple[str, Callable[[ast.Call], ast.expr]]]:
+    """(description, replacement) for each way to leave fewer constants in an array literal
+    `np.array([e0, ..., en])`: keep only element i, `ei * np.eye(n)[i]` (the other entries 0; a
+    gain vector of which one joint matters), or, when every element is a number, one value, their
+    mean, shared by every entry: `np.full(n, mean)`. The size and index are structural integers,
+    not constants (`colmo.program`)."""
+    elements = _array_elements(node)
+    if elements is None or len(elements) < 2:
+        return
+    module, size = node.func.value.id, len(elements)  # type: ignore[attr-defined]  # checked by _array_elements
+    for i, element in enumerate(elements):
+        if is_number_literal(element) and ast.literal_eval(element) == 0:
+            continue
+        yield f"kept only entry {i}, `{_short(element)}`, of `{_short(node)}`", lambda n, i=i: ast.BinOp(
+            _array_elements(n)[i], ast.Mult(), astutil.parse(f"{module}.eye({size})[{i}]").body[0].value  # type: ignore[attr-defined,index]
+        )
+    if all(is_number_literal(element) for element in elements):
+        mean = round_significant((sum(ast.literal_eval(element) for element in elements) / size,))[0]
+        yield f"shared one value, their mean {mean:g}, across the entries of `{_short(node)}`", lambda n: astutil.parse(
+            f"{module}.full({size}, {float(mean)!r})"
+        ).body[0].value  # type: ignore[attr-defined]
 
 
 def _merged_factors(node: ast.AST) -> Optional[ast.expr]:
