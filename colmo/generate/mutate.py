@@ -13,7 +13,8 @@ then takes 1..`max_mutations` of these mutations (0.. after a crossover):
     `np.arctan2(obs[i], obs[j])` or `np.sin/cos/tanh/sign/abs(obs[i])`;
   - where the action is a vector ("Action (shape (K,))" or "return shape is (K,)" in the prompt), insert an actuator
     term into what the policy returns: `e` -> `e + np.array([c1, ..., cK]) * f`, a gain per
-    actuator (every other term gives all actuators the same value);
+    actuator (every other term gives all actuators the same value), or a joint term
+    `e + c * np.eye(K)[j] * f`, one actuator's gain (one constant where the other has K);
   - replace a subexpression with a new term: `c * f`, or linear (PD) feedback
     `c1 * obs[i] + c2 * obs[j]`;
   - wrap a subexpression: `np.sin/cos/tanh/sign/abs(e)` or `np.clip(e, -c1, c2)`;

@@ -270,6 +270,19 @@ def _insert_actuator_term(fn: ast.FunctionDef, pieces: Pieces) -> bool:
     """`e` -> `e + np.array([c1, ..., cK]) * f` where `e` is what the policy returns (a returned
     expression, or the value of a variable it returns): each actuator its own gain on a feature.
     The other terms give every actuator the same value; a gait needs joints that differ."""
+    return _add_to_action(fn, pieces, _expression(f"{pieces.gains()} * {pieces.feature()}"))
+
+
+def _insert_joint_term(fn: ast.FunctionDef, pieces: Pieces) -> bool:
+    """`e` -> `e + c * np.eye(K)[j] * f`: one actuator's own gain on a feature, one constant
+    where an actuator term has K (a search capped by `database.max_constants` can afford it)."""
+    joint = pieces.rng.integers(pieces.action_size)
+    return _add_to_action(fn, pieces, _expression(f"{pieces.sign()}{pieces.magnitude()} * {pieces.np}.eye({pieces.action_size})[{joint}] * {pieces.feature()}"))
+
+
+def _add_to_action(fn: ast.FunctionDef, pieces: Pieces, term: ast.expr) -> bool:
+    """`e` -> `e + term` where `e` is what the policy returns (a returned expression, or the value
+    of a variable it returns)."""
     returned = {n.id for r in ast.walk(fn) if isinstance(r, ast.Return) and r.value for n in ast.walk(r.value) if isinstance(n, ast.Name)}
     targets = [
         s for s in ast.walk(fn)
@@ -279,7 +292,6 @@ def _insert_actuator_term(fn: ast.FunctionDef, pieces: Pieces) -> bool:
     statement = pieces.pick(targets)
     if statement is None:
         return False
-    term = _expression(f"{pieces.gains()} * {pieces.feature()}")
     statement.value = ast.BinOp(statement.value, ast.Add(), term)
     return True
 
@@ -307,7 +319,7 @@ MUTATIONS = (
     (_redraw_constant, 0.5),
 )
 # Added to `MUTATIONS` where the action is a vector.
-ACTUATOR_MUTATIONS = ((_insert_actuator_term, 2.0),)
+ACTUATOR_MUTATIONS = ((_insert_actuator_term, 2.0), (_insert_joint_term, 1.0))
 
 
 # Each crossover edits a copy of the first program's policy, taking material from the second's.
