@@ -364,6 +364,12 @@ def test_constant_factors_are_merged_by_a_measured_candidate_not_folded():
     assert remove_dead_code(code) == code  # 1.34 * 4.69 * x would round differently
     (merged,) = [c for c in deletion_candidates(code) if c.description.startswith("merged")]
     assert merged.code == "def policy(obs):\n    return 6.285 * obs[0]" and merged.nodes == count_nodes(code) - 2
+    # Wherever the numbers stand among a product's factors (a joint term and its feature's gain).
+    code = "import numpy as np\n\ndef policy(obs):\n    return obs[0] + 7.422 * np.eye(6)[3] * (1.545 * obs[6])"
+    (merged,) = [c for c in deletion_candidates(code) if c.description.startswith("merged")]
+    assert merged.code.endswith("return obs[0] + 11.47 * np.eye(6)[3] * obs[6]") and measure(merged.code).params == 1
+    merged = {c.code for c in deletion_candidates("def policy(obs):\n    return 2.0 * obs[1] * 3.0 * (obs[2] * 0.5)") if c.description.startswith("merged")}
+    assert merged == {"def policy(obs):\n    return 3.0 * obs[1] * obs[2]", "def policy(obs):\n    return 6.0 * obs[1] * (obs[2] * 0.5)"}
 
 
 def test_a_constant_factor_is_merged_into_an_array_literal_by_a_measured_candidate():

@@ -2,8 +2,9 @@
 
 `deletion_candidates` lists every one-step simplification: delete a statement, keep one branch
 of an `if` statement or of a conditional expression, drop a term of a sum or difference, a
-factor of a product, a divisor or an exponent, merge two constant factors (`2.0 * (3.0 * x)`
--> `6.0 * x`, `2.0 * (np.array([1.0, 3.0]) * x)` -> `np.array([2.0, 6.0]) * x`), unwrap a call
+factor of a product, a divisor or an exponent, merge a product's constant factors wherever they
+stand (`2.0 * (3.0 * x)` -> `6.0 * x`, `2.0 * y * (3.0 * x)` -> `6.0 * y * x`,
+`2.0 * (np.array([1.0, 3.0]) * x)` -> `np.array([2.0, 6.0]) * x`), unwrap a call
 to one of its arguments (`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), cut an array literal
 to one entry or to one value shared by all (`np.array([a, b, c])` -> `b * np.eye(3)[1]` or
 `np.full(3, mean)`: the gain vector's constants less one, where a deletion of the whole vector
@@ -271,23 +272,43 @@ def _array_edits(node: ast.Call) -> Iterator[tuple[str, Callable[[ast.Call], ast
 
 
 def _merged_factors(node: ast.AST) -> Optional[ast.expr]:
-    """`c1 * (c2 * x)`, in any order of the factors, as `c * x` with c = c1 * c2: one constant
-    fewer; likewise a factor taken into an array literal, `c * (np.array([a, b]) * x)` or
-    `c * np.array([a, b])` as `np.array([c*a, c*b]) * x`. Not a static fold, since the product
-    rounds differently, so it is scored like a deletion."""
+    """A product's number literals as one, wherever they stand among its factors (`c1 * (c2 * x)`,
+    `c1 * np.eye(6)[3] * (c2 * x)`) -> `c * ...` with c = c1 * c2: constants fewer; likewise taken
+    into an array literal among the factors, `c * (np.array([a, b]) * x)` or `c * np.array([a, b])`
+    as `np.array([c*a, c*b]) * x`. The factors stay in their order. Not a static fold, since the
+    product rounds differently, so it is scored like a deletion."""
     if not (isinstance(node, ast.BinOp) and isinstance(node.op, ast.Mult)):
         return None
-    for literal, product in ((node.left, node.right), (node.right, node.left)):
-        if not is_number_literal(literal):
-            continue
-        value = ast.literal_eval(literal)
-        if not is_number_literal(product) and (merged := _merged_literal(value, product)) is not None:
+    factors = _product_factors(node)
+    numbers = [factor for factor in factors if is_number_literal(factor)]
+    arrays = [factor for factor in factors if not is_number_literal(factor) and _merged_literal(1, factor) is not None]
+    if not numbers or len(numbers) + len(arrays[:1]) < 2:
+        return None
+    value = math.prod(ast.literal_eval(number) for number in (numbers if arrays else numbers[1:]))
+    target = arrays[0] if arrays else numbers[0]
+    merged = _merged_literal(value, target)
+    if merged is None:
+        return None
+    dropped = {id(number) for number in numbers if number is not target}
+
+    def rebuilt(factor: ast.expr) -> Optional[ast.expr]:
+        if factor is target:
             return merged
-        if isinstance(product, ast.BinOp) and isinstance(product.op, ast.Mult):
-            for inner, rest, first in ((product.left, product.right, True), (product.right, product.left, False)):
-                if (merged := _merged_literal(value, inner)) is not None:  # the factors stay in their order
-                    return ast.BinOp(merged, ast.Mult(), rest) if first else ast.BinOp(rest, ast.Mult(), merged)
-    return None
+        if id(factor) in dropped:
+            return None
+        if not (isinstance(factor, ast.BinOp) and isinstance(factor.op, ast.Mult)):
+            return factor
+        left, right = rebuilt(factor.left), rebuilt(factor.right)
+        return right if left is None else left if right is None else ast.BinOp(left, ast.Mult(), right)
+
+    return rebuilt(node)
+
+
+def _product_factors(node: ast.expr) -> list[ast.expr]:
+    """The factors of a product, through nested products, in source order."""
+    if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Mult):
+        return _product_factors(node.left) + _product_factors(node.right)
+    return [node]
 
 
 def deletion_candidates(code: str, function_name: str = "policy", stop: Callable[[], bool] = lambda: False) -> list[Candidate]:
