@@ -26,6 +26,11 @@ def parse(source: str, filename: str = "<unknown>", mode: str = "exec") -> ast.A
         return ast.parse(source, filename=filename, mode=mode)
 
 
+def expression(source: str) -> ast.expr:
+    """The expression `source` parsed (`parse` in "eval" mode)."""
+    return parse(source, mode="eval").body  # type: ignore[attr-defined,no-any-return]  # an ast.Expression
+
+
 def function(tree: ast.Module, name: str) -> ast.FunctionDef | ast.AsyncFunctionDef | None:
     """The module-level function `name` of `tree` (its first definition), or None."""
     return next((s for s in tree.body if isinstance(s, (ast.FunctionDef, ast.AsyncFunctionDef)) and s.name == name), None)

@@ -133,8 +133,8 @@ class Pieces:
         """`c * feature`, or linear feedback on two entries `c1 * obs[i] + c2 * obs[j]` (PD)."""
         if self.rng.random() < 0.4:
             first, second = self.entries(2)
-            return _expression(f"{self.sign()}{self.magnitude()} * {first} {self.pick('+-')} {self.magnitude()} * {second}")
-        return _expression(f"{self.sign()}{self.magnitude()} * {self.feature()}")
+            return astutil.expression(f"{self.sign()}{self.magnitude()} * {first} {self.pick('+-')} {self.magnitude()} * {second}")
+        return astutil.expression(f"{self.sign()}{self.magnitude()} * {self.feature()}")
 
     def gains(self) -> str:
         """A gain per actuator, `np.array([c1, ..., cK])`: random signs and magnitudes from 0.1 to 1."""
@@ -143,7 +143,7 @@ class Pieces:
 
     def extended(self, node: ast.expr) -> ast.expr:
         """`node + c * feature` or `node - c * feature`."""
-        return ast.BinOp(node, self.pick((ast.Add, ast.Sub))(), _expression(f"{self.magnitude()} * {self.feature()}"))
+        return ast.BinOp(node, self.pick((ast.Add, ast.Sub))(), astutil.expression(f"{self.magnitude()} * {self.feature()}"))
 
     def condition(self) -> ast.expr:
         """A threshold on an observation entry (half the time) or another feature, or on its
@@ -151,17 +151,13 @@ class Pieces:
         [entry] = self.entries(1)
         x = entry if self.rng.random() < 0.5 else self.feature()
         if self.rng.random() < 0.3:
-            return _expression(f"{self.np}.abs({x}) {self.pick('<>')} {self.magnitude(high=0.3)}")
-        return _expression(f"{x} {self.pick('<>')} {self.sign()}{self.magnitude(high=0.3)}")
+            return astutil.expression(f"{self.np}.abs({x}) {self.pick('<>')} {self.magnitude(high=0.3)}")
+        return astutil.expression(f"{x} {self.pick('<>')} {self.sign()}{self.magnitude(high=0.3)}")
 
     def wrapped(self, node: ast.expr) -> ast.expr:
         function = self.pick(_FUNCTIONS + ("clip",))
         bounds = f", -{self.magnitude()}, {self.magnitude()}" if function == "clip" else ""
-        return _expression(f"{self.np}.{function}({ast.unparse(node)}{bounds})")
-
-
-def _expression(source: str) -> ast.expr:
-    return astutil.parse(source, mode="eval").body
+        return astutil.expression(f"{self.np}.{function}({ast.unparse(node)}{bounds})")
 
 
 # Each mutation edits the policy function in place and says whether it found something to edit.
@@ -270,14 +266,14 @@ def _insert_actuator_term(fn: ast.FunctionDef, pieces: Pieces) -> bool:
     """`e` -> `e + np.array([c1, ..., cK]) * f` where `e` is what the policy returns (a returned
     expression, or the value of a variable it returns): each actuator its own gain on a feature.
     The other terms give every actuator the same value; a gait needs joints that differ."""
-    return _add_to_action(fn, pieces, _expression(f"{pieces.gains()} * {pieces.feature()}"))
+    return _add_to_action(fn, pieces, astutil.expression(f"{pieces.gains()} * {pieces.feature()}"))
 
 
 def _insert_joint_term(fn: ast.FunctionDef, pieces: Pieces) -> bool:
     """`e` -> `e + c * np.eye(K)[j] * f`: one actuator's own gain on a feature, one constant
     where an actuator term has K (a search capped by `database.max_constants` can afford it)."""
-    joint = pieces.rng.integers(pieces.action_size)
-    return _add_to_action(fn, pieces, _expression(f"{pieces.sign()}{pieces.magnitude()} * {pieces.np}.eye({pieces.action_size})[{joint}] * {pieces.feature()}"))
+    selector = f"{pieces.np}.eye({pieces.action_size})[{pieces.rng.integers(pieces.action_size)}]"
+    return _add_to_action(fn, pieces, astutil.expression(f"{pieces.sign()}{pieces.magnitude()} * {selector} * {pieces.feature()}"))
 
 
 def _add_to_action(fn: ast.FunctionDef, pieces: Pieces, term: ast.expr) -> bool:
@@ -341,7 +337,7 @@ def _merge(fn: ast.FunctionDef, other: ast.FunctionDef, pieces: Pieces) -> bool:
             node.id += "_b"
     first, second = fn.body[-1].value, body[-1].value
     if pieces.rng.random() < 0.5:
-        result = _expression(f"0.5 * ({ast.unparse(first)}) + 0.5 * ({ast.unparse(second)})")
+        result = astutil.expression(f"0.5 * ({ast.unparse(first)}) + 0.5 * ({ast.unparse(second)})")
     else:
         result = ast.IfExp(pieces.condition(), first, second)
     fn.body[-1:] = [s for s in body[:-1] if not is_docstring(s)] + [ast.Return(result)]

@@ -240,35 +240,42 @@ def _merged_literal(value: float, node: ast.AST) -> Optional[ast.expr]:
 def _array_elements(node: ast.AST) -> Optional[list[ast.expr]]:
     """The elements of `np.array([e0, e1, ...])` (`numpy.array` too, no keywords, at least one);
     None for anything else."""
-    is_array = isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "array"
-    if not (is_array and isinstance(node.func.value, ast.Name) and node.func.value.id in ("np", "numpy")):
-        return None
-    if node.keywords or len(node.args) != 1 or not isinstance(node.args[0], ast.List) or not node.args[0].elts:
-        return None
-    return node.args[0].elts
+    return None if _numpy_of_array(node) is None else node.args[0].elts  # type: ignore[attr-defined]  # checked there
 
 
-def _array_edits(node: ast.Call) -> Iterator[tuple[str, Callable[[ast.Call], ast.expr]]]:
+def _numpy_of_array(node: ast.AST) -> Optional[str]:
+    """The name numpy goes by (`np`, `numpy`) in `np.array([e0, e1, ...])` (no keywords, at least
+    one element); None for anything else."""
+    if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "array"):
+        return None
+    module = node.func.value
+    if not (isinstance(module, ast.Name) and module.id in ("np", "numpy")) or node.keywords or len(node.args) != 1:
+        return None
+    listed = node.args[0]
+    return module.id if isinstance(listed, ast.List) and listed.elts else None
+
+
+def _array_edits(node: ast.Call) -> Iterator[tuple[str, Callable[[ast.AST], ast.expr]]]:
     """(description, replacement) for each way to leave fewer constants in an array literal
     `np.array([e0, ..., en])`: keep only element i, `ei * np.eye(n)[i]` (the other entries 0; a
     gain vector of which one joint matters), or, when every element is a number, one value, their
     mean, shared by every entry: `np.full(n, mean)`. The size and index are structural integers,
     not constants (`colmo.program`)."""
-    elements = _array_elements(node)
-    if elements is None or len(elements) < 2:
+    module, elements = _numpy_of_array(node), _array_elements(node)
+    if module is None or elements is None or len(elements) < 2:
         return
-    module, size = node.func.value.id, len(elements)  # type: ignore[attr-defined]  # checked by _array_elements
+    size = len(elements)
+
+    def one_entry(i: int) -> Callable[[ast.AST], ast.expr]:
+        return lambda copied: ast.BinOp(_array_elements(copied)[i], ast.Mult(), astutil.expression(f"{module}.eye({size})[{i}]"))  # type: ignore[index]  # a copy of `node`
+
     for i, element in enumerate(elements):
-        if is_number_literal(element) and ast.literal_eval(element) == 0:
-            continue
-        yield f"kept only entry {i}, `{_short(element)}`, of `{_short(node)}`", lambda n, i=i: ast.BinOp(
-            _array_elements(n)[i], ast.Mult(), astutil.parse(f"{module}.eye({size})[{i}]").body[0].value  # type: ignore[attr-defined,index]
-        )
+        if not (is_number_literal(element) and ast.literal_eval(element) == 0):
+            yield f"kept only entry {i}, `{_short(element)}`, of `{_short(node)}`", one_entry(i)
     if all(is_number_literal(element) for element in elements):
         mean = round_significant((sum(ast.literal_eval(element) for element in elements) / size,))[0]
-        yield f"shared one value, their mean {mean:g}, across the entries of `{_short(node)}`", lambda n: astutil.parse(
-            f"{module}.full({size}, {float(mean)!r})"
-        ).body[0].value  # type: ignore[attr-defined]
+        shared = f"{module}.full({size}, {float(mean)!r})"
+        yield f"shared one value, their mean {mean:g}, across the entries of `{_short(node)}`", lambda copied: astutil.expression(shared)
 
 
 def _merged_factors(node: ast.AST) -> Optional[ast.expr]:
