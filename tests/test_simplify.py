@@ -134,8 +134,13 @@ def policy(obs):
         ),
         pytest.param(
             "import numpy as np\nimport math\ndef policy(obs):\n    return 2.0 * 3.0 * obs[0] + np.pi / 2.0 + -(-obs[1]) + math.sqrt(4.0) + obs[1 + 1] + np.sign(-3.0)",
-            "def policy(obs):\n    return 6.0 * obs[0] + 1.5707963267948966 + obs[1] + 2.0 + obs[2] + -1.0",
+            "def policy(obs):\n    return 6.0 * obs[0] + 1.5707963267948966 + obs[1] + 2.0 + obs[2] - 1.0",
             id="folding, integer index stays an integer",
+        ),
+        pytest.param(
+            "def policy(obs):\n    return obs[0] - -18.15 * obs[5] * obs[1] + -0.5 + -2 * obs[2] - -0.25 - obs[1] * -3.0",
+            "def policy(obs):\n    return obs[0] + 18.15 * obs[5] * obs[1] - 0.5 + -2 * obs[2] + 0.25 - obs[1] * -3.0",
+            id="a negative float leading a term as the opposite operation (not an int: -2 * [x] is not -(2 * [x]))",
         ),
         pytest.param(
             "import numpy as np\ndef policy(obs):\n    return np.pi * obs[0] + 1.0 / 0.0 * obs[1] + np.log(0.0) + np.sqrt(-1.0) + 2.0 * obs[0] * 3.0",

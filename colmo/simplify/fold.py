@@ -2,7 +2,8 @@
 
 `np.abs(4.4)` -> `4.4`, `2.0 * 3.0` -> `6.0`, `np.pi / 6` -> one literal, `2 > 1` -> `True`,
 `x if True else y` -> `x`; `-(-x)` -> `x` where only the value is used (an operand of
-arithmetic or of a comparison); and an accumulator started from its identity element,
+arithmetic or of a comparison); `a - -2.5 * x` -> `a + 2.5 * x` (a tuned constant's sign taken
+into the operation before it); and an accumulator started from its identity element,
 `x = 0.0` then `x += e` (`-=`, or `x = 1.0` then `x *= e`), written `x = e` (`-e`) where nothing
 later changes `x` in place (so `x` may be `e` itself). Folding evaluates only literals, with the trusted functions of
 `colmo.simplify.scope.FOLDABLE` (never `exec`/`eval`), and follows Python's number semantics,
@@ -85,7 +86,7 @@ class Fold(ast.NodeTransformer):
         self.generic_visit(node)
         node.left, node.right = undouble(node.left), undouble(node.right)
         function = _safe_power if isinstance(node.op, ast.Pow) else _BINARY.get(type(node.op))
-        return (function and self._evaluate(function, node.left, node.right)) or node
+        return (function and self._evaluate(function, node.left, node.right)) or _sign_taken_out(node)
 
     def visit_UnaryOp(self, node: ast.UnaryOp) -> ast.expr:
         self.generic_visit(node)
@@ -127,6 +128,29 @@ class Fold(ast.NodeTransformer):
         if isinstance(node.test, ast.Constant):
             return node.body if node.test.value else node.orelse
         return node
+
+
+def _sign_taken_out(node: ast.BinOp) -> ast.BinOp:
+    """`a - -2.5 * x` -> `a + 2.5 * x`, `a + -2.5` -> `a - 2.5`: a negative float literal leading
+    the right operand of a sum or difference is written as the opposite operation (tuned constants
+    come out negative where the program subtracts). Exact: negation is, in every rounding."""
+    if not isinstance(node.op, (ast.Add, ast.Sub)):
+        return node
+    leading = node.right
+    while isinstance(leading, ast.BinOp) and isinstance(leading.op, ast.Mult):
+        leading = leading.left
+    if not (is_number_literal(leading) and isinstance(leading, ast.UnaryOp) and isinstance(leading.operand.value, float)):  # type: ignore[attr-defined]
+        return node
+    positive = leading.operand
+    if leading is node.right:
+        node.right = positive
+    else:
+        holder = node.right
+        while holder.left is not leading:  # type: ignore[attr-defined]  # a product, walked above
+            holder = holder.left  # type: ignore[attr-defined]
+        holder.left = positive  # type: ignore[attr-defined]
+    node.op = ast.Sub() if isinstance(node.op, ast.Add) else ast.Add()
+    return node
 
 
 _IDENTITIES = {ast.Add: 0, ast.Sub: 0, ast.Mult: 1}
