@@ -404,6 +404,8 @@ def test_an_array_literal_keeps_one_entry_or_shares_one_value_by_measured_candid
     )
     assert not [d for d in edits if d.startswith("kept only entry 2,")]  # a 0 entry left alone is all zeros
     assert len(edits) == 6  # five entries kept one at a time, one mean
+    # The array is never unwrapped to its list: `[...] * obs[6]` is an array only while obs[6] is a numpy number.
+    assert not [c for c in deletion_candidates(code) if c.description.startswith("unwrapped `np.array")]
     # The size and index are structural: one constant left where there were six.
     for kept in edits.values():
         assert measure(kept).params == 1

@@ -5,7 +5,8 @@ of an `if` statement or of a conditional expression, drop a term of a sum or dif
 factor of a product, a divisor or an exponent, merge a product's constant factors wherever they
 stand (`2.0 * (3.0 * x)` -> `6.0 * x`, `2.0 * y * (3.0 * x)` -> `6.0 * y * x`,
 `2.0 * (np.array([1.0, 3.0]) * x)` -> `np.array([2.0, 6.0]) * x`), unwrap a call
-to one of its arguments (`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`), cut an array literal
+to one of its arguments (`np.tanh(e)` -> `e`, `np.clip(e, a, b)` -> `e`; never `np.array([...])`
+to its list), cut an array literal
 to one entry or to one value shared by all (`np.array([a, b, c])` -> `b * np.eye(3)[1]` or
 `np.full(3, mean)`: the gain vector's constants less one, where a deletion of the whole vector
 loses what its strongest entry carries), keep one operand of
@@ -186,7 +187,8 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
                     lambda n: n.args[2]
                 )
             for i, argument in enumerate(node.args):
-                if not is_number_literal(argument) and not isinstance(argument, ast.Starred):
+                # A list is not an array: `[0.5, 2.0] * x` works only while x is a numpy number.
+                if not is_number_literal(argument) and not isinstance(argument, (ast.Starred, ast.List, ast.Tuple)):
                     yield node, f"unwrapped `{_short(node)}` to `{_short(argument)}` at {where}", replace_with(lambda n, i=i: n.args[i])
             for description, make in _array_edits(node):
                 yield node, f"{description} at {where}", replace_with(make)
