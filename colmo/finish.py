@@ -296,8 +296,8 @@ def _simplify(
         more = f"colmo-simplify task={cfg.task.name} seed={cfg.seed} {shell_override('policy_file', run_dir / BEST_POLICY_FILE)}"
         log.warning("the simplification stopped at the finish's deadline after %d round(s); to go on: %s", result.rounds, more)
         header += f"# cut short at the finish's deadline after {result.rounds} round(s); to go on: {more}\n"
-    if not result.within_budget:
-        log.warning("the simplified policy keeps %d constants, over the budget of %d", size.params, result.max_constants)
-        header += f"# over the constant budget: {size.params} constants, at most {result.max_constants} asked\n"
+    if result.over_budget:
+        log.warning("the simplified policy is %s", result.over_budget)
+        header += f"# {result.over_budget}\n"
     (run_dir / SIMPLIFIED_POLICY_FILE).write_text(header + result.code + "\n")
     return result.to_json()

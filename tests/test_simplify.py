@@ -754,12 +754,13 @@ def test_under_a_constant_budget_no_deletion_takes_the_program_over_it():
 
     assert simplify(code, scoring(score_batch)).size.params > 1
     within = simplify(code, scoring(score_batch), max_constants=1)
-    assert within.code == code and within.within_budget and not within.steps
+    assert within.code == code and within.within_budget and not within.steps and within.over_budget is None
 
 
 def test_a_budget_no_deletion_can_meet_is_reported_as_missed():
     result = simplify("def policy(obs):\n    return 0.5", scoring(lambda codes: [Scores(1.0, 1.0) for _ in codes]), max_constants=0)
     assert result.size.params == 1 and not result.within_budget and result.to_json()["within_budget"] is False
+    assert result.over_budget == "over the constant budget: 1 constants left, at most 0 asked"  # the CLI's line, the finish's header
     with pytest.raises(ValueError, match="max_constants must be >= 0"):
         simplify(SUM_OF_TERMS, scoring(lambda codes: [Scores(1.0, 1.0) for _ in codes]), max_constants=-1)
 

@@ -59,8 +59,8 @@ def _report(result: SimplifyResult, episodes: int, heldout_episodes: int) -> str
         f"size: {before.nodes} -> {after.nodes} AST nodes, {before.lines} -> {after.lines} lines, {before.params} -> {after.params} parameters "
         f"({result.programs_scored} programs scored, {result.seconds:.1f} s)",
     ]
-    if not result.within_budget:
-        lines.append(f"over the constant budget: {after.params} constants left, simplify.max_constants={result.max_constants}")
+    if result.over_budget:
+        lines.append(result.over_budget)
     return "\n".join(lines)
 
 

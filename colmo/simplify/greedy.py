@@ -130,6 +130,11 @@ class SimplifyResult:
         """The program holds at most `max_constants` tunable constants (always, without a budget)."""
         return self.max_constants is None or self.size.params <= self.max_constants
 
+    @property
+    def over_budget(self) -> Optional[str]:
+        """The line a report carries where the budget was missed; None where it was met."""
+        return None if self.within_budget else f"over the constant budget: {self.size.params} constants left, at most {self.max_constants} asked"
+
     def to_json(self) -> dict[str, Any]:
         """The report's fields; sizes are AST node counts; non-finite scores are None (JSON has
         no infinities)."""
