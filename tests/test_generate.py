@@ -156,15 +156,18 @@ def test_where_the_action_is_a_vector_children_give_actuators_gains_of_their_own
     assert not any("np.array([" in g.text for g in scalar)
 
 
-def test_a_joint_term_gives_one_actuator_a_gain_for_one_constant(cheetah_probe):
+def test_a_joint_term_gives_one_actuator_a_gain_for_one_constant_where_asked(cheetah_probe):
     """`c * np.eye(6)[j] * f`: a gain for one joint, one tunable constant (the size and the index
     are structural), where an actuator term costs six: what a search capped at 10 constants can grow."""
     spec = load_spec("cheetah.py")
-    children = MutateGenerator(MutateConfig(max_mutations=1), seed=0, probe=cheetah_probe).generate(make_prompt(spec.starter_code), 40)
+    children = MutateGenerator(MutateConfig(max_mutations=1, joint_terms=True), seed=0, probe=cheetah_probe).generate(make_prompt(spec.starter_code), 40)
     joint_terms = [g.text for g in children if re.search(r"\* np\.eye\(6\)\[[0-5]\] \*", g.text)]
     assert joint_terms, [g.text for g in children]
     obs = np.random.default_rng(0).normal(size=17)
     assert any(np.count_nonzero(run_on(code, obs)) == 1 and parametrize(code).n_params == 1 for code in joint_terms), joint_terms
+    # Only where asked (llm.joint_terms=true).
+    default = MutateGenerator(MutateConfig(max_mutations=1), seed=0, probe=cheetah_probe).generate(make_prompt(spec.starter_code), 40)
+    assert not [g.text for g in default if "np.eye(" in g.text]
 
 
 def test_children_of_a_program_without_numpy_import_it(pendulum_probe):

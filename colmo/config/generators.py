@@ -35,6 +35,10 @@ class MutateConfig(GeneratorConfig):
     max_mutations: int = option(3, "up to this many AST mutations per child")
     constant_sigma: float = option(0.5, "relative perturbation of constants")
     attempts: int = option(40, "redraws for a child with a new working structure; then a parent with perturbed constants")
+    joint_terms: bool = option(
+        False, "where the action is a vector, also insert joint terms `c * np.eye(K)[j] * f`: one actuator's gain, one constant "
+        "(an actuator term has K); off by default: one paired cheetah seed within database.max_constants=10 scored lower with them",
+    )
 
 
 @dataclass

@@ -13,8 +13,9 @@ then takes 1..`max_mutations` of these mutations (0.. after a crossover):
     `np.arctan2(obs[i], obs[j])` or `np.sin/cos/tanh/sign/abs(obs[i])`;
   - where the action is a vector ("Action (shape (K,))" or "return shape is (K,)" in the prompt), insert an actuator
     term into what the policy returns: `e` -> `e + np.array([c1, ..., cK]) * f`, a gain per
-    actuator (every other term gives all actuators the same value), or a joint term
-    `e + c * np.eye(K)[j] * f`, one actuator's gain (one constant where the other has K);
+    actuator (every other term gives all actuators the same value); with `llm.joint_terms=true`
+    also a joint term `e + c * np.eye(K)[j] * f`, one actuator's gain (one constant where the
+    other has K, for a search capped by `database.max_constants`);
   - replace a subexpression with a new term: `c * f`, or linear (PD) feedback
     `c1 * obs[i] + c2 * obs[j]`;
   - wrap a subexpression: `np.sin/cos/tanh/sign/abs(e)` or `np.clip(e, -c1, c2)`;
@@ -48,7 +49,7 @@ import numpy as np
 from colmo import astutil
 from colmo.config import MutateConfig
 from colmo.generate.base import GENERATORS, Generation, Generator, GeneratorError, Probe, logger
-from colmo.generate.operators import ACTUATOR_MUTATIONS, CROSSOVERS, MUTATIONS, Pieces, policy_function
+from colmo.generate.operators import ACTUATOR_MUTATIONS, CROSSOVERS, JOINT_MUTATIONS, MUTATIONS, Pieces, policy_function
 from colmo.program import DISPLAY_DIGITS, ProgramError, instantiate, parametrize
 from colmo.prompt import Prompt
 
@@ -80,7 +81,8 @@ class MutateGenerator(Generator):
         super().__init__(cfg, seed, probe)
         self.rng = np.random.default_rng(seed)
         # The operators and their probabilities for a scalar action (False) and a vector one (True).
-        self._mutations = {vector: _weighted(MUTATIONS + (ACTUATOR_MUTATIONS if vector else ())) for vector in (False, True)}
+        vector_mutations = ACTUATOR_MUTATIONS + (JOINT_MUTATIONS if cfg.joint_terms else ())
+        self._mutations = {vector: _weighted(MUTATIONS + (vector_mutations if vector else ())) for vector in (False, True)}
 
     def cores(self) -> int:
         return 1  # it mutates, and probes its children, in the search's thread

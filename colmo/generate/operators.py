@@ -2,16 +2,17 @@
 
 `Pieces` draws random code fragments for the children of one prompt, written with the names
 and observation entries its programs use: terms (`c * feature`, PD feedback), conditions,
-wrappers. `MUTATIONS` (with their weights; `ACTUATOR_MUTATIONS` too where the action is a vector) and `CROSSOVERS` each edit a policy function in
-place and say whether they found something to edit; `colmo.generate.mutate` documents what
-each does and chooses among them.
+wrappers. `MUTATIONS` (with their weights; `ACTUATOR_MUTATIONS` too where the action is a
+vector, and `JOINT_MUTATIONS` where `llm.joint_terms` asks) and `CROSSOVERS` each edit a policy
+function in place and say whether they found something to edit; `colmo.generate.mutate`
+documents what each does and chooses among them.
 """
 
 from __future__ import annotations
 
 import ast
 import copy
-from typing import Any, Optional, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
@@ -266,19 +267,22 @@ def _insert_actuator_term(fn: ast.FunctionDef, pieces: Pieces) -> bool:
     """`e` -> `e + np.array([c1, ..., cK]) * f` where `e` is what the policy returns (a returned
     expression, or the value of a variable it returns): each actuator its own gain on a feature.
     The other terms give every actuator the same value; a gait needs joints that differ."""
-    return _add_to_action(fn, pieces, astutil.expression(f"{pieces.gains()} * {pieces.feature()}"))
+    return _add_to_action(fn, pieces, lambda: astutil.expression(f"{pieces.gains()} * {pieces.feature()}"))
 
 
 def _insert_joint_term(fn: ast.FunctionDef, pieces: Pieces) -> bool:
     """`e` -> `e + c * np.eye(K)[j] * f`: one actuator's own gain on a feature, one constant
     where an actuator term has K (a search capped by `database.max_constants` can afford it)."""
-    selector = f"{pieces.np}.eye({pieces.action_size})[{pieces.rng.integers(pieces.action_size)}]"
-    return _add_to_action(fn, pieces, astutil.expression(f"{pieces.sign()}{pieces.magnitude()} * {selector} * {pieces.feature()}"))
+    def term() -> ast.expr:
+        selector = f"{pieces.np}.eye({pieces.action_size})[{pieces.rng.integers(pieces.action_size)}]"
+        return astutil.expression(f"{pieces.sign()}{pieces.magnitude()} * {selector} * {pieces.feature()}")
+
+    return _add_to_action(fn, pieces, term)
 
 
-def _add_to_action(fn: ast.FunctionDef, pieces: Pieces, term: ast.expr) -> bool:
-    """`e` -> `e + term` where `e` is what the policy returns (a returned expression, or the value
-    of a variable it returns)."""
+def _add_to_action(fn: ast.FunctionDef, pieces: Pieces, term: Callable[[], ast.expr]) -> bool:
+    """`e` -> `e + term()` where `e` is what the policy returns (a returned expression, or the value
+    of a variable it returns); the term is drawn after the statement."""
     returned = {n.id for r in ast.walk(fn) if isinstance(r, ast.Return) and r.value for n in ast.walk(r.value) if isinstance(n, ast.Name)}
     targets = [
         s for s in ast.walk(fn)
@@ -288,7 +292,7 @@ def _add_to_action(fn: ast.FunctionDef, pieces: Pieces, term: ast.expr) -> bool:
     statement = pieces.pick(targets)
     if statement is None:
         return False
-    statement.value = ast.BinOp(statement.value, ast.Add(), term)
+    statement.value = ast.BinOp(statement.value, ast.Add(), term())
     return True
 
 
@@ -315,7 +319,9 @@ MUTATIONS = (
     (_redraw_constant, 0.5),
 )
 # Added to `MUTATIONS` where the action is a vector.
-ACTUATOR_MUTATIONS = ((_insert_actuator_term, 2.0), (_insert_joint_term, 1.0))
+ACTUATOR_MUTATIONS = ((_insert_actuator_term, 2.0),)
+# Added too where `llm.joint_terms` asks for them.
+JOINT_MUTATIONS = ((_insert_joint_term, 1.0),)
 
 
 # Each crossover edits a copy of the first program's policy, taking material from the second's.
