@@ -242,19 +242,13 @@ def _merged_literal(value: float, node: ast.AST) -> Optional[ast.expr]:
 def _array_elements(node: ast.AST) -> Optional[list[ast.expr]]:
     """The elements of `np.array([e0, e1, ...])` (`numpy.array` too, no keywords, at least one);
     None for anything else."""
-    return None if _numpy_of_array(node) is None else node.args[0].elts  # type: ignore[attr-defined]  # checked there
-
-
-def _numpy_of_array(node: ast.AST) -> Optional[str]:
-    """The name numpy goes by (`np`, `numpy`) in `np.array([e0, e1, ...])` (no keywords, at least
-    one element); None for anything else."""
     if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "array"):
         return None
     module = node.func.value
     if not (isinstance(module, ast.Name) and module.id in ("np", "numpy")) or node.keywords or len(node.args) != 1:
         return None
     listed = node.args[0]
-    return module.id if isinstance(listed, ast.List) and listed.elts else None
+    return listed.elts if isinstance(listed, ast.List) and listed.elts else None
 
 
 def _array_edits(node: ast.Call) -> Iterator[tuple[str, Callable[[ast.AST], ast.expr]]]:
@@ -263,10 +257,10 @@ def _array_edits(node: ast.Call) -> Iterator[tuple[str, Callable[[ast.AST], ast.
     gain vector of which one joint matters), or, when every element is a number, one value, their
     mean, shared by every entry: `np.full(n, mean)`. The size and index are structural integers,
     not constants (`colmo.program`)."""
-    module, elements = _numpy_of_array(node), _array_elements(node)
-    if module is None or elements is None or len(elements) < 2:
+    elements = _array_elements(node)
+    if elements is None or len(elements) < 2:
         return
-    size = len(elements)
+    module, size = node.func.value.id, len(elements)  # type: ignore[attr-defined]  # `np` or `numpy`: an array literal
 
     def one_entry(i: int) -> Callable[[ast.AST], ast.expr]:
         return lambda copied: ast.BinOp(_array_elements(copied)[i], ast.Mult(), astutil.expression(f"{module}.eye({size})[{i}]"))  # type: ignore[index]  # a copy of `node`

@@ -136,19 +136,13 @@ def _sign_taken_out(node: ast.BinOp) -> ast.BinOp:
     come out negative where the program subtracts). Exact: negation is, in every rounding."""
     if not isinstance(node.op, (ast.Add, ast.Sub)):
         return node
-    leading = node.right
-    while isinstance(leading, ast.BinOp) and isinstance(leading.op, ast.Mult):
-        leading = leading.left
+    holder, field = node, "right"  # where the leading factor stands: down the left side of a product
+    while isinstance(factor := getattr(holder, field), ast.BinOp) and isinstance(factor.op, ast.Mult):
+        holder, field = factor, "left"
+    leading = getattr(holder, field)
     if not (is_number_literal(leading) and isinstance(leading, ast.UnaryOp) and isinstance(leading.operand.value, float)):  # type: ignore[attr-defined]
         return node
-    positive = leading.operand
-    if leading is node.right:
-        node.right = positive
-    else:
-        holder = node.right
-        while holder.left is not leading:  # type: ignore[attr-defined]  # a product, walked above
-            holder = holder.left  # type: ignore[attr-defined]
-        holder.left = positive  # type: ignore[attr-defined]
+    setattr(holder, field, leading.operand)
     node.op = ast.Sub() if isinstance(node.op, ast.Add) else ast.Add()
     return node
 
