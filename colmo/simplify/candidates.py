@@ -152,8 +152,10 @@ def _edits(tree: ast.Module, function_name: str, parents: dict[int, tuple[ast.AS
                     yield node, f"dropped the term `{_short(dropped)}` at {where}", replace_with(lambda n: negated(n.right))
                 else:
                     yield node, f"dropped the {word} `{_short(dropped)}` at {where}", replace_with(lambda n, side=side: getattr(n, side))
-            if _merged_factors(node) is not None:
-                yield node, f"merged the constant factors of `{_short(node)}` at {where}", replace_with(_merged_factors)
+            if (factors := _merged_factors(node)) is not None:
+                yield node, f"merged the constant factors of `{_short(node)}` at {where}", replace_with(
+                    lambda n, factors=factors: copy.deepcopy(factors)
+                )
             merged = merged_terms(node, single)
             if merged is not None:
                 yield node, f"merged the alike terms of `{_short(node)}` into one at {where}", replace_with(
@@ -230,11 +232,11 @@ def _merged_literal(value: float, node: ast.AST) -> Optional[ast.expr]:
         if not math.isfinite(product):
             return None
         return number_literal(round_significant((product,))[0] if isinstance(product, float) else product)
-    listed = _array_elements(node)
-    if listed is None:
+    numbers = _array_numbers(node)
+    if numbers is None:
         return None
-    elements = [_merged_literal(value, element) for element in listed]
-    if any(element is None or isinstance(element, ast.Call) for element in elements):
+    elements = [_merged_literal(value, number) for number in numbers]
+    if any(element is None for element in elements):
         return None
     return ast.Call(node.func, [ast.List(elements, ast.Load())], [])
 
@@ -284,7 +286,7 @@ def _merged_factors(node: ast.AST) -> Optional[ast.expr]:
         return None
     factors = _product_factors(node)
     numbers = [factor for factor in factors if is_number_literal(factor)]
-    arrays = [factor for factor in factors if not is_number_literal(factor) and _merged_literal(1, factor) is not None]
+    arrays = [factor for factor in factors if _array_numbers(factor) is not None]
     if not numbers or len(numbers) + len(arrays[:1]) < 2:
         return None
     value = math.prod(ast.literal_eval(number) for number in (numbers if arrays else numbers[1:]))
@@ -305,6 +307,13 @@ def _merged_factors(node: ast.AST) -> Optional[ast.expr]:
         return right if left is None else left if right is None else ast.BinOp(left, ast.Mult(), right)
 
     return rebuilt(node)
+
+
+def _array_numbers(node: ast.AST) -> Optional[list[ast.expr]]:
+    """The elements of `np.array([...])` when every one is a number literal (an array
+    `_merged_literal` can scale); None otherwise."""
+    elements = _array_elements(node)
+    return elements if elements is not None and all(is_number_literal(element) for element in elements) else None
 
 
 def _product_factors(node: ast.expr) -> list[ast.expr]:
