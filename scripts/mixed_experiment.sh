@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Issue 34 part 2: one search, two generators, at equal wall clock. On each task, 30 minutes a run
 # (search.max_seconds=1800, everything included), colmo's defaults otherwise (2 workers):
-#   mixed:  the 1.5B model in process (one thread) with search.fill=mutate
+#   mixed:  the 1.5B model in process (one thread) with search.fill=mutate, called back to back (search.model_share=always)
 #   mutate: colmo's embedded mutation alone
 #   model:  the 1.5B model alone (seed 0 only)
 #   by_yield: mixed, the model's share of the time following its yield (search.model_share=by_yield)
@@ -29,7 +29,7 @@ run() {  # task variant seed overrides...
 }
 for seed in ${SEEDS:-0 1 2}; do
   for task in $tasks; do
-    run "$task" mixed "$seed" llm=llamacpp "llm.model_path=$model" search.fill=mutate
+    run "$task" mixed "$seed" llm=llamacpp "llm.model_path=$model" search.fill=mutate search.model_share=always
     run "$task" mutate "$seed" llm=mutate
     run "$task" steady "$seed" llm=mutate search.steady_state=true
     run "$task" steady_q "$seed" llm=mutate search.steady_state=true search.steady_queue=1
