@@ -37,7 +37,7 @@ class MutateConfig(GeneratorConfig):
     attempts: int = option(40, "redraws for a child with a new working structure; then a parent with perturbed constants")
     joint_terms: bool = option(
         False, "where the action is a vector, also insert joint terms `c * np.eye(K)[j] * f`: one actuator's gain, one constant "
-        "(an actuator term has K); off by default: one paired cheetah seed within database.max_constants=10 scored lower with them",
+        "(an actuator term has K); off by default, as it was not found to pay (docs/mixed-generation.md)",
     )
 
 

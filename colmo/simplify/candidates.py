@@ -270,7 +270,7 @@ def _array_edits(node: ast.Call) -> Iterator[tuple[str, Callable[[ast.AST], ast.
     for i, element in enumerate(elements):
         if not (is_number_literal(element) and ast.literal_eval(element) == 0):
             yield f"kept only entry {i}, `{_short(element)}`, of `{_short(node)}`", one_entry(i)
-    if all(is_number_literal(element) for element in elements):
+    if _array_numbers(node) is not None:
         mean = round_significant((sum(ast.literal_eval(element) for element in elements) / size,))[0]
         shared = f"{module}.full({size}, {float(mean)!r})"
         yield f"shared one value, their mean {mean:g}, across the entries of `{_short(node)}`", lambda copied: astutil.expression(shared)
