@@ -50,6 +50,14 @@ def run_colmo(module: str, *overrides: str, cwd: Path, timeout: float = 300) -> 
     )
 
 
+def limit_for_load(seconds: float) -> int:
+    """A search's time limit for a test, longer on a machine loaded past twice its cores: start-up
+    slows with the load, and a limit it eats ends the run "no sample searched" (right for the run,
+    not what the test checks)."""
+    oversubscribed = os.getloadavg()[0] / (2 * (os.cpu_count() or 1))
+    return round(seconds * max(1.0, oversubscribed))
+
+
 def refused(app, *argv: str) -> tuple[int, str]:
     """The exit code and the one line with which `app` (a colmo command: `colmo.__main__.main`,
     `colmo.optimize.__main__.main`, ...) refuses the command line `argv` before Hydra starts,
