@@ -40,7 +40,10 @@ class SlowModel(Generator):
 
 
 def test_mutation_fills_the_workers_while_the_model_thinks_and_the_model_is_shown_its_programs(tmp_path):
-    cfg = compose("search", "search.fill=mutate", "search.max_samples=40", "llm.batch_size=1", "search.queue_size=1", "database.num_islands=1", *TINY)
+    cfg = compose(
+        "search", "search.fill=mutate", "search.model_share=always", "search.max_samples=40", "llm.batch_size=1", "search.queue_size=1",
+        "database.num_islands=1", *TINY,
+    )
     model = SlowModel()
     summary = Search(cfg, tmp_path / "run", generator=model).run()
     with sqlite3.connect(tmp_path / "run" / "programs.db") as connection:
@@ -80,9 +83,9 @@ class UnhelpfulModel(SlowModel):
         return [Generation("I cannot help with that.", "unhelpful-model:test", completion_tokens=5, seconds=0.5) for _ in range(n)]
 
 
-def test_by_yield_a_model_that_sets_no_island_best_pauses_while_mutation_has_the_workers(tmp_path, caplog):
+def test_by_yield_the_default_a_model_that_sets_no_island_best_pauses_while_mutation_has_the_workers(tmp_path, caplog):
     cfg = compose(
-        "search", "search.fill=mutate", "search.model_share=by_yield", "search.min_model_share=0.2", "search.max_samples=40",
+        "search", "search.fill=mutate", "search.min_model_share=0.2", "search.max_samples=40",
         "search.duplicate_retries=0",
         "llm.batch_size=1", "search.queue_size=1", "database.num_islands=1", *TINY,
     )
@@ -104,10 +107,8 @@ def test_by_yield_a_model_that_sets_no_island_best_pauses_while_mutation_has_the
     assert min(share for share, _ in shares) < 0.5
 
 
-def test_model_share_by_yield_needs_a_filler_and_a_share_in_range(tmp_path, monkeypatch):
+def test_model_share_names_a_pacing_and_a_share_in_range(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    code, line = refused(colmo, "search.model_share=by_yield")
-    assert code == 2 and "search.model_share=by_yield needs search.fill=mutate" in line
     code, line = refused(colmo, "search.fill=mutate", "search.model_share=sometimes")
     assert code == 2 and "search.model_share must be one of always, by_yield, got 'sometimes'" in line
     code, line = refused(colmo, "search.fill=mutate", "search.model_share=by_yield", "search.min_model_share=0")

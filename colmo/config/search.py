@@ -150,9 +150,9 @@ class SearchLoopConfig:
         "(a run is then no longer a deterministic function of its seed: the mix depends on timing)",
     )
     model_share: str = option(
-        "always", "with search.fill: always (the model is called back to back) or by_yield (after each call the model pauses, "
-        "so that it calls for the share of the time its island bests per CPU-second earn against the filler's; the filler "
-        "has the cores meanwhile)",
+        "by_yield", "with search.fill: by_yield (after each call the model pauses, so that it calls for the share of the "
+        "time its island bests per CPU-second earn against the filler's; the filler has the cores meanwhile) or always (the "
+        "model is called back to back); without a filler the model is called back to back",
     )
     min_model_share: float = option(0.1, "with search.model_share=by_yield: the least share of the time the model calls for")
     progress: bool = option(True, "live progress display on a terminal, a plain line every progress_every_s otherwise")
@@ -166,10 +166,6 @@ class SearchLoopConfig:
         )
         require(self.fill in (None, "mutate"), f"search.fill must be null or mutate, got {self.fill!r}")
         require(self.model_share in MODEL_SHARES, f"search.model_share must be one of {', '.join(MODEL_SHARES)}, got {self.model_share!r}")
-        require(
-            self.model_share == "always" or self.fill is not None,
-            "search.model_share=by_yield needs search.fill=mutate (the filler has the workers while the model pauses)",
-        )
         require(0 < self.min_model_share <= 1, f"search.min_model_share must be in (0, 1], got {self.min_model_share}")
         require(self.max_seconds >= 0, f"search.max_seconds must be >= 0 (0 = no limit), got {self.max_seconds}")
         above(self, "search", progress_every_s=0)
