@@ -39,6 +39,7 @@ from colmo.components import register_schemas, schema_names
 from colmo.config.fields import check_libraries
 from colmo.config.schemas import CONFIG_MODULE
 from colmo.errors import EXIT_INTERRUPTED, EXIT_RUNTIME, EXIT_USAGE, ConfigError, RunError, one_line
+from colmo.provenance import provenance
 
 
 def to_objects(cfg: DictConfig) -> Any:
@@ -188,6 +189,7 @@ def hydra_app(
     def decorate(run: Callable[[Any], Any]) -> App:
         @functools.wraps(run)
         def task_function(cfg: DictConfig) -> Any:
+            provenance()  # taken as the job starts: editing the checkout during a run changes not what it records
             try:
                 return run(to_objects(cfg))
             except (ConfigError, RunError) as error:

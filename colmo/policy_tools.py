@@ -24,6 +24,7 @@ from colmo.evaluation import Evaluation, Evaluator, Executor
 from colmo.heldout import branch_counts, heldout_evaluator, task_evaluator
 from colmo.intake import read_policy_file
 from colmo.program import ParametricProgram
+from colmo.provenance import provenance
 from colmo.specs import Spec, load_task_spec
 
 RESULT_FILE = "result.json"
@@ -79,11 +80,11 @@ def run_directory() -> Path:
 
 
 def write_result(summary: dict[str, Any], policy_name: str, policy_text: str) -> list[Path]:
-    """Write the tool's policy file and `result.json` (`summary`) into the run directory, say
-    where on stderr, and return both paths."""
+    """Write the tool's policy file and `result.json` (`summary` and the run's
+    `colmo.provenance`) into the run directory, say where on stderr, and return both paths."""
     directory = run_directory()
     policy, result = directory / policy_name, directory / RESULT_FILE
-    result.write_text(json.dumps(summary, indent=2))
+    result.write_text(json.dumps({**summary, "provenance": provenance()}, indent=2))
     policy.write_text(policy_text)
     print(f"wrote {policy} and {result}", file=sys.stderr)
     return [policy, result]

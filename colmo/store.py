@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping, Optional
 
 from colmo.coverage import annotate, counts_of
 from colmo.errors import ConfigError, RunError
+from colmo.provenance import provenance
 from colmo.record import TO_EVALUATE_AGAIN, Elapsed, SampleRecord, Summary
 
 log = logging.getLogger("colmo.store")
@@ -330,10 +331,11 @@ def read_summary(run_dir: Path) -> Optional[dict[str, Any]]:
 
 
 def write_outputs(summary: Summary, run_dir: Path) -> None:
-    """`summary.json` and the best policy as a readable `.py` file with its scores, in the run
-    directory; a file that cannot be written is logged, not fatal (the store holds everything)."""
+    """`summary.json` (with the run's `colmo.provenance`) and the best policy as a readable `.py`
+    file with its scores, in the run directory; a file that cannot be written is logged, not
+    fatal (the store holds everything)."""
     try:
-        (run_dir / SUMMARY_FILE).write_text(json.dumps(summary.as_dict(), indent=2))
+        (run_dir / SUMMARY_FILE).write_text(json.dumps({**summary.as_dict(), "provenance": provenance()}, indent=2))
         if summary.best_code:
             heldout = f", held-out {summary.best_heldout_score:.2f}" if summary.best_heldout_score is not None else ""
             header = (

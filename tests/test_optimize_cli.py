@@ -1,5 +1,8 @@
 """`python -m colmo.optimize`: tuning one policy file end to end, and its user errors."""
 
+import importlib.metadata
+import json
+
 import pytest
 from conftest import last_json_line, refused, run_colmo
 
@@ -39,7 +42,8 @@ def test_mistuned_policy_gains_100_points_with_oneplusone(tmp_path, examples):
     assert len(summary["returns"]) == 3
     assert summary["score"] >= summary["score_initial"] + 100, summary
     assert "score with its own constants" in result.stdout
-    assert (next(tmp_path.glob("outputs/optimize/*/*/result.json"))).is_file()
+    written = json.loads(next(tmp_path.glob("outputs/optimize/*/*/result.json")).read_text())
+    assert written["score"] == summary["score"] and written["provenance"]["libraries"]["nevergrad"] == importlib.metadata.version("nevergrad")
     tuned = next(tmp_path.glob("outputs/optimize/*/*/tuned_policy.py")).read_text()
     assert tuned.startswith("# tuned by colmo-optimize") and tuned.endswith(summary["code"] + "\n")
 

@@ -1,5 +1,6 @@
 """The search end to end: outputs, determinism, crash safety and resume."""
 
+import importlib.metadata
 import json
 import os
 import random
@@ -41,6 +42,7 @@ def test_small_search_end_to_end(tmp_path):
     for field in ("best_score", "samples", "programs_evaluated", "duplicates_skipped", "failures", "seconds", "best_so_far"):
         assert field in summary
     assert summary["samples"] == 12  # model calls, duplicates generated again included
+    assert summary["provenance"]["libraries"]["mujoco"] == importlib.metadata.version("mujoco")  # what made the numbers
     rows = store_rows(run_dir)
     assert summary["programs_evaluated"] + summary["duplicates_skipped"] + summary["failures"] == len(rows) - 1
     assert summary["best_so_far"][0][0] == 0 and summary["best_so_far"][-1][1] == summary["best_score"]

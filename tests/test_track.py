@@ -4,6 +4,7 @@ children, unique names, metric columns, a classic ML experiment, the programs ta
 states and table writes on a store of its own."""
 
 import dataclasses
+import importlib.metadata
 import json
 import multiprocessing
 import os
@@ -141,6 +142,7 @@ def test_sweep_jobs_log_params_tags_metric_columns_programs_and_artifacts(sweep,
         assert (tags["task"], tags["llm"], tags["seed"], tags["colmo.command"]) == ("pendulum", "mutate", "0", "search")
         assert f"gfo={tags['gfo']}" in tags["overrides"].split()
         assert tags["colmo.version"] and len(tags.get("mlflow.source.git.commit", "x" * 40)) == 40
+        assert tags["colmo.lib.mujoco"] == summary["provenance"]["libraries"]["mujoco"] == importlib.metadata.version("mujoco")
 
         # metrics: the key ones as run-list columns (their latest values), best score first (what
         # MLflow's compare page plots first), rounded as they are shown ...

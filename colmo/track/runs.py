@@ -45,11 +45,9 @@ from __future__ import annotations
 import atexit
 import dataclasses
 import datetime
-import importlib.metadata
 import json
 import logging
 import math
-import subprocess
 import tempfile
 import time
 from pathlib import Path
@@ -62,6 +60,7 @@ from mlflow import MlflowClient
 from mlflow.utils.mlflow_tags import MLFLOW_LOGGED_ARTIFACTS, MLFLOW_PARENT_RUN_ID
 
 from colmo.config import OptimizeConfig, SearchConfig
+from colmo.provenance import mlflow_tags
 from colmo.readability import METRICS as READABILITY_METRICS
 from colmo.record import BatchReport, SampleRecord, Summary
 from colmo.store import BEST_POLICY_FILE, BEST_SO_FAR_PLOT, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
@@ -87,22 +86,6 @@ def flatten(values: dict[str, Any], prefix: str = "") -> dict[str, str]:
         else:
             flat[key] = value if isinstance(value, str) else json.dumps(value)
     return flat
-
-
-def _git_commit() -> Optional[str]:
-    """HEAD of the colmo checkout this module runs from; None for an installed package (even
-    one installed inside some other repository's virtual environment)."""
-    package = Path(__file__).resolve().parents[1]  # colmo/
-    try:
-        result = subprocess.run(
-            ["git", "rev-parse", "--show-toplevel", "HEAD"], cwd=package, capture_output=True, text=True, timeout=10
-        )
-    except (OSError, subprocess.TimeoutExpired):
-        return None
-    lines = result.stdout.split()
-    if result.returncode != 0 or len(lines) != 2 or Path(lines[0]).resolve() != package.parent:
-        return None
-    return lines[1]
 
 
 def _status(summary: Summary) -> str:
@@ -169,17 +152,12 @@ def start_run(
     client, experiment_id = open_experiment(uri, experiment)
     started = start_time or time.time()
     clock = datetime.datetime.fromtimestamp(started).strftime("%H%M%S")
-    tags = {
-        **tags, "overrides": " ".join(hydra.overrides.task), "colmo.version": importlib.metadata.version("colmo"),
-    }
-    commit = _git_commit()
-    if commit:
-        tags["mlflow.source.git.commit"] = commit
+    tags = {**tags, "overrides": " ".join(hydra.overrides.task), **mlflow_tags()}
     parent_id = sweep_dir = None
     name = f"{variant}-{clock}"
     if hydra.mode == RunMode.MULTIRUN:
         sweep_dir = (launch_dir / hydra.sweep.dir).resolve()
-        parent_tags = {key: tags[key] for key in ("colmo.version", "mlflow.source.git.commit") if key in tags}
+        parent_tags = {key: tags[key] for key in ("colmo.version", "mlflow.source.git.commit", "colmo.uncommitted_changes") if key in tags}
         parent_id = sweep_parent(client, experiment_id, sweep_dir, f"{experiment}-sweep-{clock}", parent_tags)
         tags[MLFLOW_PARENT_RUN_ID] = parent_id
         name = f"{name}-j{hydra.job.num}"

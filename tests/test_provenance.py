@@ -1,0 +1,67 @@
+"""A run records what produced its numbers (`colmo.provenance`): the commit of the checkout colmo
+ran from and whether the checkout differed from it, and the versions of the libraries a score
+depends on; `summary.json`, `result.json` and the MLflow tags carry it (tests/test_search.py,
+test_optimize_cli.py and test_track.py check those)."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import subprocess
+from pathlib import Path
+
+from colmo.provenance import LIBRARIES, mlflow_tags, provenance, source_state
+
+
+def git(directory: Path, *args: str) -> str:
+    command = ["git", "-c", "user.name=t", "-c", "user.email=t@example.org", *args]
+    return subprocess.run(command, cwd=directory, check=True, capture_output=True, text=True).stdout.strip()
+
+
+def checkout(tmp_path: Path) -> Path:
+    """A repository with a package `pkg/` at its top, committed, and `ignored/` in .gitignore."""
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "module.py").write_text("x = 1\n")
+    (tmp_path / ".gitignore").write_text("ignored/\n")
+    git(tmp_path, "init", "-q")
+    git(tmp_path, "add", ".")
+    git(tmp_path, "commit", "-q", "-m", "first")
+    return tmp_path / "pkg"
+
+
+def test_a_clean_checkout_gives_its_commit_and_no_changes(tmp_path):
+    package = checkout(tmp_path)
+    (tmp_path / "ignored").mkdir()
+    (tmp_path / "ignored" / "run.log").write_text("what git ignores is not a change\n")
+    assert source_state(package) == (git(tmp_path, "rev-parse", "HEAD"), False)
+
+
+def test_a_changed_or_added_file_is_a_change(tmp_path):
+    package = checkout(tmp_path)
+    head = git(tmp_path, "rev-parse", "HEAD")
+    (package / "module.py").write_text("x = 2\n")
+    assert source_state(package) == (head, True)
+    git(tmp_path, "checkout", "--", ".")
+    (package / "new.py").write_text("y = 1\n")  # imported by the changed code, not committed
+    assert source_state(package) == (head, True)
+
+
+def test_a_package_that_is_not_at_the_top_of_a_checkout_has_no_commit(tmp_path):
+    package = checkout(tmp_path)
+    nested = package / "site-packages" / "colmo"  # installed inside some other repository's environment
+    nested.mkdir(parents=True)
+    assert source_state(nested) == (None, None)
+    outside = tmp_path.parent / f"{tmp_path.name}-plain" / "pkg"
+    outside.mkdir(parents=True)
+    assert source_state(outside) == (None, None)
+
+
+def test_the_record_names_the_installed_libraries_and_the_tags_carry_them():
+    record = provenance()
+    installed = {name: importlib.metadata.version(name) for name in ("numpy", "mujoco", "nevergrad")}
+    assert installed.items() <= record["libraries"].items()
+    assert set(record["libraries"]) <= set(LIBRARIES) and record["cpus"] >= 1
+    tags = mlflow_tags()
+    assert tags["colmo.version"] == record["colmo"] == importlib.metadata.version("colmo")
+    assert all(tags[f"colmo.lib.{name}"] == version for name, version in installed.items())
+    # This suite runs from a checkout (.ci/run clones one): its commit is MLflow's source tag.
+    assert tags.get("mlflow.source.git.commit") == record["commit"]
