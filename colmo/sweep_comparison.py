@@ -21,7 +21,9 @@ was killed), stopped before its limits, or evaluated no program of its own
 (`colmo.record.shortfall`); the sweep then ends with one line naming them and exit code 1.
 Where the sweep compares settings, not only seeds, each setting's scores follow, and its
 difference to the first setting with a bootstrap interval (`colmo.comparison`): "no
-significant difference" where the interval holds 0.
+significant difference" where the interval holds 0. Where the jobs with a result ran on
+different code or libraries (their `summary.json`'s `provenance` differs: a sweep resumed after
+an upgrade), lines name what differed and which jobs ran which.
 The report line appears when the jobs were tracked in MLflow (`colmo.track`), naming the sweep
 by its id (`sweep_id`).
 """
@@ -98,6 +100,7 @@ def comparison_lines(sweep_dir: Path, jobs: list[JobOutcome], shown_dir: Optiona
         samples, seconds, searched = (job.summary.get(key, 0) for key in ("samples", "seconds", "search_seconds"))
         lines.append(f"  {job.number:>3}  {variant:<{width}}  {best:>8}  {heldout:>8}  {samples:>7}  {seconds:>7.1f}  {searched:>8.1f}")
     lines += variant_lines(jobs, variants)
+    lines += provenance_lines(jobs)
     tracked = [job for job in jobs if job.tracking is not None]
     if tracked:
         from colmo.track.sweep import sweep_id  # MLflow only for a tracked sweep
@@ -143,6 +146,42 @@ def variant_lines(jobs: list[JobOutcome], variants: list[str]) -> list[str]:
         seeds = ", ".join(f"{score:.2f}" for score in scores)
         change = "" if index == 0 or not baseline else f"  {difference(baseline, scores).text(2)}"
         lines.append(f"    {setting:<{width}}  {mean_std(scores, 2)} ({seeds}){change}")
+    return lines
+
+
+def _code(record: dict[str, Any]) -> str:
+    if record.get("commit"):
+        return record["commit"][:12] + (" with uncommitted changes" if record.get("uncommitted_changes") else "")
+    return f"colmo {record.get('colmo')}"
+
+
+def _facets(record: Optional[dict[str, Any]]) -> dict[str, str]:
+    """A job's provenance as the values compared across jobs: its code, Python, CPUs, libraries."""
+    if not record:
+        return {}
+    return {"code": _code(record), "python": str(record.get("python")), "cpus": str(record.get("cpus")), **record.get("libraries", {})}
+
+
+def provenance_lines(jobs: list[JobOutcome]) -> list[str]:
+    """Where the jobs with a result ran on different code, libraries, Python or CPU counts (a
+    sweep resumed after an upgrade, or spread over machines): what differed, each value with its
+    jobs (`colmo.provenance`). Nothing when they agree or none recorded it."""
+    facets = {job.number: _facets(job.summary.get("provenance")) for job in jobs if job.failure is None}
+    if not any(facets.values()):
+        return []
+    differing: dict[str, dict[str, list[int]]] = {}
+    for name in dict.fromkeys(name for values in facets.values() for name in values):
+        jobs_by_value: dict[str, list[int]] = {}
+        for number, values in facets.items():
+            jobs_by_value.setdefault(values.get(name, "not installed") if values else "not recorded", []).append(number)
+        if len(jobs_by_value) > 1:
+            differing[name] = jobs_by_value
+    if not differing:
+        return []
+    lines = ["  the jobs ran on different code or libraries (scores may differ for that alone):"]
+    for facet, values in differing.items():
+        shown = ", ".join(f"{value} (job{'s' * (len(numbers) > 1)} {', '.join(map(str, numbers))})" for value, numbers in values.items())
+        lines.append(f"    {facet}: {shown}")
     return lines
 
 

@@ -117,6 +117,36 @@ def test_settings_compared_over_seeds_get_their_mean_and_the_difference_with_its
     assert not any("by setting" in line for line in comparison_lines(Path("/runs/sweep"), jobs[:3]))  # seeds only: nothing to compare
 
 
+def provenance(commit: str = "a" * 40, changed: bool = False, nevergrad: str = "1.0.12", cpus: int = 2) -> dict:
+    return {"colmo": "0.1.0", "commit": commit, "uncommitted_changes": changed, "python": "3.11.7", "cpus": cpus,
+            "libraries": {"numpy": "2.4.6", "nevergrad": nevergrad}}
+
+
+def test_jobs_run_on_different_code_or_libraries_are_named_with_what_differed():
+    def job(number: int, record, **fields) -> JobOutcome:
+        return JobOutcome(number, (f"seed={number}",), summary(provenance=record, **fields) if record != "none" else summary(), None, "pendulum")
+
+    alike = [job(0, provenance()), job(1, provenance())]
+    assert not any("different code" in line for line in comparison_lines(Path("/runs/sweep"), alike))
+    # A sweep resumed after an upgrade: job 2 ran later code, with changes, and another nevergrad;
+    # job 3 was written before colmo recorded provenance; job 4 has no result, so it is not compared.
+    jobs = [*alike, job(2, provenance("b" * 40, changed=True, nevergrad="1.0.13")), job(3, "none"),
+            job(4, provenance("c" * 40, cpus=64), programs_evaluated=0)]
+    lines = comparison_lines(Path("/runs/sweep"), jobs)
+    start = lines.index("  the jobs ran on different code or libraries (scores may differ for that alone):")
+    assert lines[start + 1:] == [
+        "    code: aaaaaaaaaaaa (jobs 0, 1), bbbbbbbbbbbb with uncommitted changes (job 2), not recorded (job 3)",
+        "    python: 3.11.7 (jobs 0, 1, 2), not recorded (job 3)",
+        "    cpus: 2 (jobs 0, 1, 2), not recorded (job 3)",
+        "    numpy: 2.4.6 (jobs 0, 1, 2), not recorded (job 3)",
+        "    nevergrad: 1.0.12 (jobs 0, 1), 1.0.13 (job 2), not recorded (job 3)",
+    ]
+    installed = [job(0, provenance()), job(1, {**provenance(), "commit": None, "libraries": {"numpy": "2.4.6"}})]
+    assert comparison_lines(Path("/runs/sweep"), installed)[-2:] == [
+        "    code: aaaaaaaaaaaa (job 0), colmo 0.1.0 (job 1)", "    nevergrad: 1.0.12 (job 0), not installed (job 1)",
+    ]
+
+
 def test_the_comparison_of_settings_goes_into_the_sweeps_parent_run(tmp_path):
     from colmo.track import open_experiment
     from colmo.track.sweep import record_comparison, sweep_id
