@@ -79,13 +79,20 @@ def run_directory() -> Path:
     return Path(HydraConfig.get().runtime.output_dir)
 
 
-def write_result(summary: dict[str, Any], policy_name: str, policy_text: str) -> list[Path]:
-    """Write the tool's policy file and `result.json` (`summary` and the run's
-    `colmo.provenance`) into the run directory, say where on stderr, and return both paths."""
-    directory = run_directory()
-    policy, result = directory / policy_name, directory / RESULT_FILE
+def write_result_file(summary: dict[str, Any]) -> Path:
+    """Write `result.json` (`summary` and the run's `colmo.provenance`) into the run directory
+    and return its path."""
+    result = run_directory() / RESULT_FILE
     result.write_text(json.dumps({**summary, "provenance": provenance()}, indent=2))
+    return result
+
+
+def write_result(summary: dict[str, Any], policy_name: str, policy_text: str) -> list[Path]:
+    """Write the tool's policy file and `result.json` (`write_result_file`) into the run
+    directory, say where on stderr, and return both paths."""
+    policy = run_directory() / policy_name
     policy.write_text(policy_text)
+    result = write_result_file(summary)
     print(f"wrote {policy} and {result}", file=sys.stderr)
     return [policy, result]
 

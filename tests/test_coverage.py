@@ -135,6 +135,9 @@ def test_colmo_evaluate_prints_the_policy_with_its_branch_counts(tmp_path):
     assert counted["episodes"] == 3 and [site["kind"] for site in counted["sites"]] == ["if", "conditional", "if", "where", "clip"]
     said = "`cos_theta > 1.5` is never true (`cos_theta` is in [-1, 1])"  # read from the code and the spec's bounds
     assert f"decided by the code: {said}\n" in result.stdout and last_json_line(result.stdout)["decided"] == [said]
+    (written,) = tmp_path.glob("outputs/**/result.json")  # the JSON line, kept with what produced it
+    kept = json.loads(written.read_text())
+    assert kept.pop("provenance")["libraries"]["mujoco"] and kept == last_json_line(result.stdout)
 
 
 def test_pruning_keeps_the_side_of_each_branch_that_ran_and_nothing_undecided():

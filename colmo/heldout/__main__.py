@@ -3,8 +3,8 @@ one policy file on held-out episodes (`colmo.heldout`).
 
     colmo-evaluate task=pendulum policy_file=best_policy.py episodes=1000
 
-Its last stdout line is a JSON object (`score`, `episodes`, `returns`, ...); a policy that
-fails exits 1. With `robustness=true` it also scores the policy under model mismatch
+Its last stdout line is a JSON object (`score`, `episodes`, `returns`, ...), also written to
+`result.json` in the run directory with the run's provenance; a policy that fails exits 1. With `robustness=true` it also scores the policy under model mismatch
 (`colmo.robustness`) on `robustness_episodes` held-out episodes per grid point (with
 `robustness_precision`, more until each point's interval holds it), prints the
 table, writes `robustness.{json,csv,png}` into the run directory and adds `robustness` (one
@@ -25,7 +25,7 @@ from colmo.bounds import decided_comparisons
 from colmo.cli import hydra_app
 from colmo.config import EvaluateConfig
 from colmo.heldout import heldout_score, robustness_of
-from colmo.policy_tools import PolicySession, check_policy_file, policy_session, print_result, run_directory
+from colmo.policy_tools import PolicySession, check_policy_file, policy_session, print_result, run_directory, write_result_file
 from colmo.program import instantiate
 from colmo.record import finite_or_none
 from colmo.robustness import save, table
@@ -64,6 +64,7 @@ def main(cfg: EvaluateConfig) -> None:
     result["decided"] = [str(d) for d in decided_comparisons(instantiate(program.skeleton, program.values), session.spec.observation_bounds)]
     for line in result["decided"]:
         print(f"decided by the code: {line}")
+    write_result_file(result)
     print_result(result)
     if evaluation.failure:
         sys.exit(1)
