@@ -1,5 +1,5 @@
 """What produced a run's numbers: colmo's version and, when colmo runs from a git checkout, its
-commit and whether the checkout differed from it; Python, the platform and its cores; and the
+commit and whether the checkout differed from it (installed, where pip took it from); Python, the platform and its cores; and the
 versions of the libraries a score depends on (the simulator, the optimizers, numpy, the model
 runtime). `summary.json` and `result.json` carry it as `provenance`, and the MLflow run as
 tags, so a number can be traced to the code and libraries that made it.
@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import importlib.metadata
+import json
 import os
 import platform
 import subprocess
@@ -39,15 +40,34 @@ def source_state(package: Path) -> tuple[Optional[str], Optional[bool]]:
     return lines[1], (bool(changes.stdout.strip()) if changes.returncode == 0 else None)
 
 
+def installed_from(direct_url: Optional[str]) -> tuple[Optional[str], Optional[str]]:
+    """The URL pip installed colmo from and, for a git URL (`pip install git+https://...`), the
+    commit, read from PEP 610's `direct_url.json` (`direct_url`, its text); (None, None) without one."""
+    try:
+        record = json.loads(direct_url or "")
+    except ValueError:
+        return None, None
+    return record.get("url"), (record.get("vcs_info") or {}).get("commit_id")
+
+
 @functools.cache
 def provenance() -> dict[str, Any]:
     """This process's provenance (module docstring), taken once: `colmo.cli` asks as each job
-    starts, so edits to the checkout while a run goes on do not change what it records."""
+    starts, so edits to the checkout while a run goes on do not change what it records. An
+    installed colmo has the commit only where pip installed it from git."""
     commit, uncommitted = source_state(Path(__file__).resolve().parent)
+    url = None
+    if commit is None:
+        try:
+            url, commit = installed_from(importlib.metadata.distribution("colmo").read_text("direct_url.json"))
+        except importlib.metadata.PackageNotFoundError:
+            pass
+        uncommitted = False if commit else None
     return {
         "colmo": _version("colmo"),
         "commit": commit,
         "uncommitted_changes": uncommitted,
+        "installed_from": url,
         "python": platform.python_version(),
         "platform": platform.platform(),
         "cpus": os.cpu_count(),

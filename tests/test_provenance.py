@@ -9,7 +9,7 @@ import importlib.metadata
 import subprocess
 from pathlib import Path
 
-from colmo.provenance import LIBRARIES, mlflow_tags, provenance, source_state
+from colmo.provenance import LIBRARIES, installed_from, mlflow_tags, provenance, source_state
 
 
 def git(directory: Path, *args: str) -> str:
@@ -55,6 +55,14 @@ def test_a_package_that_is_not_at_the_top_of_a_checkout_has_no_commit(tmp_path):
     assert source_state(outside) == (None, None)
 
 
+def test_an_installed_colmo_has_a_commit_only_where_pip_took_it_from_git():
+    commit = "4c9f293f05d81552df94e2eab5ff3a920c6b56a0"
+    from_git = '{"url": "https://github.com/o/colmo", "vcs_info": {"vcs": "git", "commit_id": "%s", "requested_revision": "main"}}' % commit
+    assert installed_from(from_git) == ("https://github.com/o/colmo", commit)
+    assert installed_from('{"dir_info": {}, "url": "file:///work/ciclone"}') == ("file:///work/ciclone", None)  # pip install .
+    assert installed_from(None) == (None, None) and installed_from("not json") == (None, None)
+
+
 def test_the_record_names_the_installed_libraries_and_the_tags_carry_them():
     record = provenance()
     installed = {name: importlib.metadata.version(name) for name in ("numpy", "mujoco", "nevergrad")}
@@ -63,5 +71,5 @@ def test_the_record_names_the_installed_libraries_and_the_tags_carry_them():
     tags = mlflow_tags()
     assert tags["colmo.version"] == record["colmo"] == importlib.metadata.version("colmo")
     assert all(tags[f"colmo.lib.{name}"] == version for name, version in installed.items())
-    # This suite runs from a checkout (.ci/run clones one): its commit is MLflow's source tag.
+    # Run from a checkout (pip install -e), the commit is MLflow's source tag; installed (.ci/run), neither is set.
     assert tags.get("mlflow.source.git.commit") == record["commit"]
