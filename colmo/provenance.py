@@ -1,8 +1,9 @@
 """What produced a run's numbers: colmo's version and, when colmo runs from a git checkout, its
-commit and whether the checkout differed from it (installed, where pip took it from); Python, the platform and its cores; and the
-versions of the libraries a score depends on (the simulator, the optimizers, numpy, the model
-runtime). `summary.json` and `result.json` carry it as `provenance`, and the MLflow run as
-tags, so a number can be traced to the code and libraries that made it.
+commit and whether the checkout differed from it (installed, where pip took it from); Python,
+the platform and its cores; and the versions of the libraries a score depends on (the
+simulator, the optimizers, numpy, the model runtime). `summary.json` and `result.json` carry
+it as `provenance`, and the MLflow run as tags, so a number can be traced to the code and
+libraries that made it.
 """
 
 from __future__ import annotations
