@@ -33,6 +33,9 @@ import numpy as np
 
 from colmo.environments.quadruped import Quadruped
 
+# Only the uprightness, a cosine, has a bound that holds whatever the policy does.
+OBSERVATION_BOUNDS = (None,) * 47 + ((-1.0, 1.0),) + (None,) * 30
+
 
 def make_environment(**options) -> Quadruped:
     return Quadruped(**options)
