@@ -4,8 +4,9 @@ one policy file on held-out episodes (`colmo.heldout`).
     colmo-evaluate task=pendulum policy_file=best_policy.py episodes=1000
 
 Its last stdout line is a JSON object (`score`, `episodes`, `returns`, ...), also written to
-`result.json` in the run directory with the run's provenance; a policy that fails exits 1. With `robustness=true` it also scores the policy under model mismatch
-(`colmo.robustness`) on `robustness_episodes` held-out episodes per grid point (with
+`result.json` in the run directory with the run's provenance; a policy that fails exits 1.
+With `robustness=true` it also scores the policy under model mismatch (`colmo.robustness`) on
+`robustness_episodes` held-out episodes per grid point (with
 `robustness_precision`, more until each point's interval holds it), prints the
 table, writes `robustness.{json,csv,png}` into the run directory and adds `robustness` (one
 entry per magnitude, nominal first) and `delay` to the JSON line. With `coverage=true` it
