@@ -13,19 +13,26 @@ from hydra.core.hydra_config import HydraConfig
 
 from colmo.cli import hydra_app
 from colmo.config import OpenAIConfig, SearchConfig
-from colmo.errors import RunError
+from colmo.errors import ConfigError, RunError
 from colmo.shell import shell_override
 from colmo.trackers import make_tracker
 
 
 def check_inputs(cfg: SearchConfig) -> None:
     """The spec file loads, `resume=` names a run made with the same scoring settings, and with
-    `llm=openai` a server answers: all before any output directory, MLflow run or sandbox exists.
-    (Imports here, not above: shell completion imports this module on every Tab.)"""
+    `llm=openai` a server answers, and `finish.retune_budget` has a method that tunes: all before
+    any output directory, MLflow run or sandbox exists. (Imports here, not above: shell completion
+    imports this module on every Tab.)"""
+    from colmo.optimize.methods import tunes_constants
     from colmo.specs import load_task_spec
     from colmo.store import open_for_resume, run_settings
 
     load_task_spec(cfg.task.spec)
+    if cfg.finish.retune_budget and not tunes_constants(cfg.gfo):
+        raise ConfigError(
+            f"finish.retune_budget={cfg.finish.retune_budget} re-tunes with gfo.method, and gfo={cfg.gfo.method} tunes nothing: "
+            "pick a gfo that tunes, or finish.retune_budget=0"
+        )
     if cfg.resume:
         open_for_resume(Path(cfg.resume).expanduser(), run_settings(cfg))
     if isinstance(cfg.llm, OpenAIConfig):

@@ -4,7 +4,10 @@ simplified best policy, and a video and plot of it in action.
 A search selects programs by their training score, which therefore flatters the winner; the
 top `finish.top` structures get a held-out score from the referee on `heldout.episodes`
 fresh episodes (`colmo.heldout`). The best one's branches are counted over the training and
-held-out episodes (`colmo.coverage`: the comments of best_policy.py); it is then simplified (`colmo.simplify`) and
+held-out episodes (`colmo.coverage`: the comments of best_policy.py); it is then simplified (`colmo.simplify`),
+with `finish.retune_budget` the result's constants re-tuned at that budget (retuned_policy.py, with
+its held-out score beside the one it started from: the search tunes each program at `gfo.budget`,
+far fewer evaluations than a final policy of many constants may need), and the best program
 rendered (`colmo.render`) on its first held-out episode, into the run directory; with
 `finish.robustness`, before that, scored over a grid of model-mismatch magnitudes
 (`colmo.robustness`: robustness.json/.csv/.png, a few numbers in the summary). Each step is
@@ -35,11 +38,13 @@ from colmo.errors import RunError
 from colmo.evaluation import CANCELLED, Evaluator, Executor
 from colmo.finish_plan import RENDER_FIXED_S, VIDEO_MIN_S, FinishPlan, RefereeCost, plan_finish
 from colmo.heldout import alike, branch_counts, heldout_evaluator, heldout_score, robustness_of
+from colmo.intake import read_program
 from colmo.names import misnamed
-from colmo.record import EVALUATED, SampleRecord, Summary, Totals
+from colmo.optimize.tune import CandidateEvaluator, optimize_program
+from colmo.record import EVALUATED, SampleRecord, Summary, Totals, finite_or_none
 from colmo.robustness import save
 from colmo.shell import shell_override
-from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, ProgramStore
+from colmo.store import BEST_POLICY_FILE, RETUNED_POLICY_FILE, SIMPLIFIED_POLICY_FILE, ProgramStore
 
 if TYPE_CHECKING:
     from colmo.database import StoredProgram
@@ -57,6 +62,7 @@ class BestPrograms:
     heldout: list[dict] = field(default_factory=list)
     media: dict = field(default_factory=dict)
     simplified: dict = field(default_factory=dict)
+    retuned: dict = field(default_factory=dict)
     robustness: dict = field(default_factory=dict)
     coverage: dict = field(default_factory=dict)
     misnamed: list[str] = field(default_factory=list)
@@ -73,7 +79,7 @@ class BestPrograms:
         return Summary(
             task=task, best_score=best.score if best else None, best_heldout_score=best_heldout, best_key=best.key if best else None,
             best_code=best.code if best else None, best_so_far=tuple(best_so_far), stop_reason=stop_reason, run_dir=str(run_dir),
-            heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, robustness=self.robustness, coverage=self.coverage,
+            heldout=tuple(self.heldout), media=self.media, simplified=self.simplified, retuned=self.retuned, robustness=self.robustness, coverage=self.coverage,
             misnamed=tuple(self.misnamed), decided=tuple(self.decided), readability=self.readability, startup_seconds=startup_seconds,
             search_seconds=search_seconds, by_generator=by_generator or {},
             **asdict(totals),
@@ -145,10 +151,10 @@ def finish(
         else:
             step = time.monotonic()
             # More episodes for a stated precision only from the slack: the simplification keeps its planned slot.
-            best.robustness = _robustness(cfg, executor, evaluator, top[0], run_dir, until - plan.render_seconds - plan.simplify_seconds)
+            best.robustness = _robustness(cfg, executor, evaluator, top[0], run_dir, until - plan.render_seconds - plan.simplify_seconds - plan.retune_seconds)
             took["robustness"] = time.monotonic() - step
     if cfg.finish.simplify:
-        simplify_until = until - plan.render_seconds
+        simplify_until = until - plan.render_seconds - plan.retune_seconds
         # Simplifying first measures the best program on the training and the held-out episodes.
         if not best.heldout or simplify_until - time.monotonic() < 2 * best_took:
             log.warning("no time left to simplify the best policy (search.max_seconds)")
@@ -160,6 +166,10 @@ def finish(
                 cfg, executor, evaluator, heldout, top[0], run_dir, simplify_until - 2 * best_took, plan.reduced, hint, observation_names,
             )
             took["simplification"] = time.monotonic() - step
+    if cfg.finish.retune_budget and best.heldout:
+        step = time.monotonic()
+        best.retuned = _retune(cfg, executor, evaluator, heldout, top[0], best, run_dir, until - plan.render_seconds, best_took)
+        took["re-tuning"] = time.monotonic() - step
     best.readability = readability.report(top[0].code, best.coverage, best.simplified, best.misnamed, best.decided)
     log.info("best policy's readability: %s", readability.describe(best.readability))
     if cfg.finish.render:
@@ -172,6 +182,54 @@ def finish(
         ", ".join(f"{name} {seconds:.0f} s" for name, seconds in took.items()),
     )
     return best
+
+
+def _retune(
+    cfg: SearchConfig, executor: Executor, evaluator: Evaluator, heldout: Evaluator, record: SampleRecord, best: BestPrograms, run_dir: Path,
+    until: float, heldout_took: float,
+) -> dict:
+    """The final policy (the simplified one where simplification made it, else the best program)
+    with its constants re-tuned by `gfo.method` at `finish.retune_budget` evaluations, stopped
+    early enough before `until` for its held-out score (`heldout_took`: what the best program's
+    took), written to `retuned_policy.py`; the summary's `retuned`."""
+    simplified = "score" in best.simplified  # a failed simplification says only why
+    source = "simplified" if simplified else "best"
+    code = best.simplified["code"] if simplified else record.code
+    initial_heldout = best.simplified["heldout_score"] if simplified else best.heldout[0]["heldout_score"]
+    program = read_program(code, evaluator.allowed_imports)
+    if not program.n_params:
+        log.info("the %s policy has no constants to re-tune", source)
+        return {}
+    if _left(until) < 3 * heldout_took:  # its own constants, the final ones and the held-out score
+        log.warning("no time left to re-tune the %s policy (search.max_seconds)", source)
+        return {}
+    gfo = replace(cfg.gfo, budget=cfg.finish.retune_budget)
+    chunks = max(1, executor.n_workers // gfo.workers)
+    # What is being scored when the tuning stops still ends, and the referee's two scores follow.
+    stop = lambda: _left(until) <= 3 * heldout_took  # noqa: E731
+    result = optimize_program(program, CandidateEvaluator(executor, evaluator, program.skeleton, chunks, label="re-tuning"), gfo, cfg.seed, stop)
+    if result.failure:
+        log.warning("the %s policy not re-tuned: %s", source, result.failure)
+        return {"from": source, "failure": result.failure}
+    limit = min(max(_left(until), 1.0), heldout.referee_timeout_s)
+    scored = heldout_score(executor, heldout, program.skeleton, result.params, timeout_s=limit)
+    score = None if scored.failure else finite_or_none(scored.score)
+    log.info(
+        "the %s policy re-tuned (gfo=%s, %d evaluations%s): training score %.2f -> %.2f, held-out %s -> %s",
+        source, gfo.method, result.evaluations, ", cut short at the finish's deadline" if result.cut_short else "",
+        result.initial.score, result.score, _shown(initial_heldout), _shown(score),
+    )
+    header = (
+        f"# colmo: the {source} policy of {cfg.task.name} re-tuned (gfo={gfo.method}, {result.evaluations} evaluations): "
+        f"training score {result.score:.2f}, held-out {_shown(score)}\n"
+    )
+    (run_dir / RETUNED_POLICY_FILE).write_text(header + result.code + "\n")
+    return {
+        "from": source, "gfo": gfo.method, "budget": gfo.budget, "evaluations": result.evaluations, "cut_short": result.cut_short,
+        "seconds": round(result.seconds, 3), "n_params": program.n_params, "score_initial": finite_or_none(result.initial.score),
+        "heldout_score_initial": initial_heldout, "score": finite_or_none(result.score), "heldout_score": score,
+        "heldout_failure": scored.failure, "code": result.code, "file": RETUNED_POLICY_FILE,
+    }
 
 
 def _warm_up_render() -> threading.Thread:

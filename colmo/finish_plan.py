@@ -5,8 +5,8 @@ must end by the limit, the finish (`colmo.finish`) included: `plan_finish` estim
 its steps costs from what the referee costs (`RefereeCost`: per episode, and per lockstep batch
 of episodes, measured on the starter and the search's programs) and, where the full work does not
 fit in the time it is given, makes each step cheaper (fewer held-out episodes and programs, a
-shorter simplification, a smaller video: down to 15 frames a second, then only the episode's
-first seconds, never a slide show). The search stops early enough to leave that time
+shorter simplification, a shorter re-tuning, a smaller video: down to 15 frames a second, then
+only the episode's first seconds, never a slide show). The search stops early enough to leave that time
 (`colmo.timelimit`), and the finish plans again with the time actually left.
 """
 
@@ -67,10 +67,11 @@ class FinishPlan:
     size: tuple[int, int]  # of the video
     reduced: bool  # cheaper than configured, to fit the time limit
     robustness_seconds: float = 0.0  # the best program's robustness report; 0: none
+    retune_seconds: float = 0.0  # the final policy's re-tuning and its held-out score; 0: none
 
     @property
     def seconds(self) -> float:
-        return self.heldout_seconds + self.robustness_seconds + self.simplify_seconds + self.render_seconds
+        return self.heldout_seconds + self.robustness_seconds + self.simplify_seconds + self.retune_seconds + self.render_seconds
 
     def describe(self, cfg: SearchConfig) -> str:
         parts = [f"held-out scores of {self.top} program(s) over {self.heldout_episodes} episodes"]
@@ -78,6 +79,8 @@ class FinishPlan:
             parts.append("robustness report" if self.robustness_seconds else "no robustness report")
         if cfg.finish.simplify:
             parts.append(f"simplification {self.simplify_seconds:.0f} s")
+        if cfg.finish.retune_budget:
+            parts.append(f"re-tuning {self.retune_seconds:.0f} s")
         if cfg.finish.render:
             parts.append(f"video {self.size[0]}x{self.size[1]}")
         return ", ".join(parts) + (" (reduced to fit search.max_seconds)" if self.reduced else "")
@@ -99,22 +102,29 @@ def plan_finish(cfg: SearchConfig, referee: RefereeCost, workers: int, available
     render = episode + RENDER_FIXED_S + VIDEO_S if cfg.finish.render else 0.0
     grid = grid_points(cfg.finish.robustness_magnitudes, cfg.finish.robustness_delays)
     robustness = heldout_cost(grid, cfg.finish.robustness_episodes) if cfg.finish.robustness else 0.0
-    full = FinishPlan(top, episodes, heldout_cost(top, episodes), simplify, render, VIDEO_S, (640, 480), False, robustness)
+    retune = retune_cost(cfg, referee, workers) if cfg.finish.retune_budget else 0.0
+    full = FinishPlan(top, episodes, heldout_cost(top, episodes), simplify, render, VIDEO_S, (640, 480), False, robustness, retune)
     if full.seconds <= available:
         return full
+    steps = 1 + cfg.finish.simplify + cfg.finish.render + cfg.finish.robustness + bool(retune)
     # The robustness report, already on few episodes, is whole or skipped: it keeps its cost if that fits in an equal share.
-    if robustness > available / (1 + cfg.finish.simplify + cfg.finish.render + cfg.finish.robustness):
+    if robustness > available / steps:
         robustness = 0.0
-    available -= robustness
-    # The render first gets what it cannot do without (the episode, the plot, a few frames).
-    render = max(episode + RENDER_FIXED_S + VIDEO_MIN_S, available / (1 + cfg.finish.simplify + cfg.finish.render)) if cfg.finish.render else 0.0
-    left = max(available - render, 0.0)
     # Simplifying measures the best program on the training and the held-out episodes, then scores
     # its candidates the same way: at least three such measurements, or it cannot start. So the
     # held-out episodes are as many as leave it that; further programs' held-out scores and a
     # longer simplification share what remains.
     measurements = 3 if cfg.finish.simplify else 0
     training = heldout_cost(1, cfg.task.episodes)
+    least_render = episode + RENDER_FIXED_S + VIDEO_MIN_S if cfg.finish.render else 0.0
+    least = least_render + (1 + measurements) * heldout_cost(1, min(workers, episodes)) + measurements * training
+    # The re-tuning stops where its slot ends with the best constants so far: an equal share at
+    # most, and only what the other steps can spare of what they cannot do without.
+    retune = min(retune, available / steps, max(available - robustness - least, 0.0))
+    available -= robustness + retune
+    # The render first gets what it cannot do without (the episode, the plot, a few frames).
+    render = max(least_render, available / (1 + cfg.finish.simplify + cfg.finish.render)) if cfg.finish.render else 0.0
+    left = max(available - render, 0.0)
     budget = max(left - measurements * training, 0.0) / (1 + measurements)  # for one held-out score
     held_out = next((n for n in range(episodes, workers, -workers) if heldout_cost(1, n) <= budget), min(workers, episodes))
     one = heldout_cost(1, held_out)  # a program's held-out score
@@ -124,4 +134,13 @@ def plan_finish(cfg: SearchConfig, referee: RefereeCost, workers: int, available
     return FinishPlan(
         kept, held_out, kept * one,
         max(left - kept * one, 0.0) if cfg.finish.simplify else 0.0, render, video, (640, 480) if video >= VIDEO_S else SMALL, True, robustness,
+        retune,
     )
+
+
+def retune_cost(cfg: SearchConfig, referee: RefereeCost, workers: int) -> float:
+    """What re-tuning the final policy costs: `finish.retune_budget` fast-path evaluations on the
+    training episodes, spread over the workers, then the referee's training and held-out scores."""
+    workers = max(workers, 1)
+    candidates = SAFETY * cfg.finish.retune_budget * cfg.task.episodes * referee.episode / workers
+    return candidates + referee.seconds(cfg.task.episodes, workers) + referee.seconds(cfg.heldout.episodes, workers)

@@ -193,6 +193,7 @@ class Summary(Totals):
     heldout: tuple[dict, ...] = ()  # the top programs' training and held-out scores
     media: dict = field(default_factory=dict)  # the best policy's plot and video, relative to run_dir
     simplified: dict = field(default_factory=dict)  # the best policy simplified: scores, sizes, code
+    retuned: dict = field(default_factory=dict)  # the final policy re-tuned at finish.retune_budget: scores, code
     robustness: dict = field(default_factory=dict)  # the best policy under model mismatch: headline scores, files in run_dir
     coverage: dict = field(default_factory=dict)  # what each branch of the best policy did (`colmo.coverage.summary`)
     misnamed: tuple[str, ...] = ()  # the best policy's variables whose names contradict the spec's (`colmo.names`)

@@ -43,6 +43,7 @@ STORE_FILE = "programs.db"
 SUMMARY_FILE = "summary.json"
 BEST_POLICY_FILE = "best_policy.py"
 SIMPLIFIED_POLICY_FILE = "simplified_policy.py"
+RETUNED_POLICY_FILE = "retuned_policy.py"
 BEST_SO_FAR_PLOT = "best_so_far.png"  # the best score so far per model call: an MLflow run's figure, a report's
 LOCK_FILE = ".colmo.lock"
 

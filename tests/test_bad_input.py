@@ -29,6 +29,8 @@ CASES = [
     (["database.num_islands=0"], "database.num_islands must be >= 1, got 0"),
     (["database.max_constants=-1"], "database.max_constants must be >= 0, got -1"),
     (["llm.batch_size=0"], "llm.batch_size must be >= 1, got 0"),
+    (["finish.retune_budget=-1"], "finish.retune_budget must be >= 0, got -1"),
+    (["gfo=none", "finish.retune_budget=500"], "finish.retune_budget=500 re-tunes with gfo.method, and gfo=none tunes nothing"),
     (["search.steady_queue=1"], "search.steady_queue needs search.steady_state=true (without it, batches queue: search.queue_size)"),
     (["llm=openai", "search.steady_state=true"], "search.steady_state=true is for llm=mutate, whose answers take no time: with llm=openai"),
     (["executor.timeout_s=-1"], "executor.timeout_s must be > 0, got -1.0"),

@@ -170,9 +170,10 @@ def test_a_batch_starts_only_while_the_run_can_still_drain_it():
     assert not tight.can_start(1) and not tight.past_deadline()
 
 
+@pytest.mark.parametrize("retune", [0, 1000])
 @pytest.mark.parametrize("available", [12.0, 15.0, 22.0, 40.0])
-def test_a_finish_cut_to_fit_still_leaves_the_simplification_room_to_start(available):
-    cfg = compose("search", "task=pendulum")
+def test_a_finish_cut_to_fit_still_leaves_the_simplification_room_to_start(available, retune):
+    cfg = compose("search", "task=pendulum", f"finish.retune_budget={retune}")
     referee, workers = RefereeCost(episode=0.03, batch=0.3), 2
     assert not plan_finish(cfg, referee, workers).reduced  # about a minute, as configured
     plan = plan_finish(cfg, referee, workers, available)
@@ -182,6 +183,22 @@ def test_a_finish_cut_to_fit_still_leaves_the_simplification_room_to_start(avail
     best_measured = referee.seconds(plan.heldout_episodes, workers) + referee.seconds(cfg.task.episodes, workers)
     assert plan.simplify_seconds >= 3 * best_measured - 1e-9
     assert plan.render_seconds >= referee.seconds(1, 1) + 2.0  # the episode it films and a few frames
+
+
+def test_the_finish_plans_the_re_tuning_in_full_where_it_fits_and_cuts_it_to_a_share_where_not():
+    referee, workers = RefereeCost(episode=0.03, batch=0.3), 2
+    plain = plan_finish(compose("search", "task=pendulum"), referee, workers)
+    cfg = compose("search", "task=pendulum", "finish.retune_budget=1000")
+    full = plan_finish(cfg, referee, workers)
+    assert plain.retune_seconds == 0 and not full.reduced
+    # 1000 candidates' training episodes over both workers, then the referee's training and held-out scores.
+    candidates = SAFETY * 1000 * cfg.task.episodes * referee.episode / workers
+    assert full.retune_seconds == pytest.approx(candidates + referee.seconds(cfg.task.episodes, workers) + referee.seconds(cfg.heldout.episodes, workers))
+    assert full.seconds == pytest.approx(plain.seconds + full.retune_seconds) and "re-tuning" in full.describe(cfg)
+    available = plain.seconds + full.retune_seconds / 2  # everything else fits, the re-tuning does not
+    cut = plan_finish(cfg, referee, workers, available)
+    assert cut.reduced and cut.seconds <= available + 1e-9
+    assert 0 < cut.retune_seconds <= available / 4  # an equal share with the held-out scores, the simplification and the video
 
 
 def test_a_long_run_keeps_a_share_of_its_time_for_the_simplification():

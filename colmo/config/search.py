@@ -68,6 +68,10 @@ class FinishConfig:
     simplify_share: float = option(
         0.03, "share of search.max_seconds kept for the simplification at least (at most simplify.max_seconds); 0: the least it needs",
     )
+    retune_budget: int = option(
+        0, "GFO evaluations (gfo.method and its options) that re-tune the constants of the final policy, the simplified one where "
+        "simplification made it, at the end of the search (retuned_policy.py, with its held-out score); 0: none",
+    )
     robustness: bool = option(
         False, "the best policy scored over a grid of model-mismatch magnitudes (robustness.json/.csv/.png; colmo.robustness)",
     )
@@ -81,7 +85,7 @@ class FinishConfig:
     robustness_delays: list[int] = option(ROBUSTNESS_DELAYS, "control delays (steps) of the robustness grid")
 
     def __post_init__(self) -> None:
-        at_least(self, "finish", top=1)
+        at_least(self, "finish", top=1, retune_budget=0)
         require(0 <= self.simplify_share <= 0.2, f"finish.simplify_share must be in [0, 0.2], got {self.simplify_share}")
         check_robustness_grid(
             "finish.", self.robustness_episodes, self.robustness_magnitudes, self.robustness_delays, self.robustness_precision,

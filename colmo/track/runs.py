@@ -25,7 +25,8 @@ What a search's run holds:
       mlflow.set_tracking_uri(uri); mlflow.set_experiment("pendulum")
       mlflow.load_table("programs.json", run_ids=[...], extra_columns=["run_id"])
   (`MlflowClient(uri).load_table` also searches the *global* tracking URI: set it.)
-- at the end: best_policy.py, simplified_policy.py (when simplification made it), summary.json, the Hydra config files under `hydra/`, the
+- at the end: best_policy.py, simplified_policy.py (when simplification made it), retuned_policy.py and metrics
+  `retuned_score`, `retuned_heldout_score` (with `finish.retune_budget`), summary.json, the Hydra config files under `hydra/`, the
   best-so-far plot `best_so_far.png` (against model calls and against seconds, side by side), and the best policy's plot and video on a held-out episode
   under `best_policy/` (when `finish.render` made them), with `finish.robustness` its robustness report
   (`robustness.json/.csv/.png` under `robustness/`, metrics `robustness_nominal`, `robustness_worst`,
@@ -63,7 +64,7 @@ from colmo.config import OptimizeConfig, SearchConfig
 from colmo.provenance import mlflow_tags
 from colmo.readability import METRICS as READABILITY_METRICS
 from colmo.record import BatchReport, SampleRecord, Summary
-from colmo.store import BEST_POLICY_FILE, BEST_SO_FAR_PLOT, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
+from colmo.store import BEST_POLICY_FILE, BEST_SO_FAR_PLOT, RETUNED_POLICY_FILE, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE
 from colmo.track.backend import FAILED, FINISHED, KILLED, RUNNING, browse_hint, default_tracking_uri, log_metrics, log_params, open_experiment, retry_locked
 from colmo.track.programs import PROGRAM_COLUMNS, PROGRAMS_PAGE, PROGRAMS_TABLE, program_row, programs_page
 from colmo.track.resumed import RUN_DIR_TAG, earlier_run, history, remember, remembered
@@ -219,14 +220,17 @@ class MlflowTracker:
         # The rest of the summary's totals were logged with the last batch.
         headline = {name: value for name, value in summary.robustness.items() if name.startswith("robustness_")}
         readable = {f"readability_{name}": summary.readability.get(name) for name in READABILITY_METRICS}
-        log_metrics(self.client, self.run_id, {"best_heldout_score": summary.best_heldout_score, **headline, **_split(summary), **readable}, summary.samples)
+        retuned = {f"retuned_{name}": summary.retuned.get(name) for name in ("score", "heldout_score")} if summary.retuned else {}
+        log_metrics(
+            self.client, self.run_id, {"best_heldout_score": summary.best_heldout_score, **retuned, **headline, **_split(summary), **readable}, summary.samples,
+        )
         heldout = {entry["sample"]: entry["heldout_score"] for entry in summary.heldout}
         for row in self.rows:
             row["heldout_score"] = heldout.get(row["sample"], row["heldout_score"])
         if self.rows:
             self._write_table()
         run_dir = Path(summary.run_dir)
-        for name in (BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, SUMMARY_FILE):  # each one the search made
+        for name in (BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, RETUNED_POLICY_FILE, SUMMARY_FILE):  # each one the search made
             if (run_dir / name).is_file():
                 self.client.log_artifact(self.run_id, str(run_dir / name))
         for kind in ("plot", "video"):  # the best policy on a held-out episode
