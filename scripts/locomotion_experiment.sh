@@ -10,13 +10,13 @@
 #   quadruped/cma       GFO CMA-ES
 #   quadruped/noise     starts whose hinges are up to 0.05 rad off (episodes that differ, so held-out scores say something)
 #   quadruped/cma_noise GFO CMA-ES on those starts (it tuned the paper's 44 constants to 265 held out, (1+1)-ES to 211)
-#   quadruped/retune    quadruped/noise with the finish's re-tuning of the simplified winner at 1000 evaluations
+#   quadruped/finish_retune  quadruped/noise with the finish's re-tuning of the simplified winner at 1000 evaluations
 #                       (finish.retune_budget=1000), inside the same time limit
 #   a1/default          the Unitree A1 (MENAGERIE_ROOT: a Menagerie tree with unitree_a1)
 #   a1/cma              GFO CMA-ES on the A1
 #   a1/seconds3         3-second episodes (3000 steps): one second pays a topple, three pay a gait
 #   a1/episodes20       20 training episodes instead of 10 (its winners lost 5-20 held-out)
-#   a1/retune           the finish's re-tuning at 1000 evaluations (finish.retune_budget=1000)
+#   a1/finish_retune    the finish's re-tuning at 1000 evaluations (finish.retune_budget=1000)
 # Each run is a one-job sweep into its own directory, so running this again keeps what finished
 # and resumes the rest (a resumed run's time limit is the whole run's). RUN_SECONDS sets another
 # length (the goal is within an hour: RUN_SECONDS=3600 into another OUT).
@@ -43,9 +43,9 @@ run cheetah episodes20 task.episodes=20
 run quadruped cma gfo=cma
 run quadruped noise +task.env.joint_noise=0.05
 run quadruped cma_noise gfo=cma +task.env.joint_noise=0.05
-run quadruped retune +task.env.joint_noise=0.05 finish.retune_budget=1000
+run quadruped finish_retune +task.env.joint_noise=0.05 finish.retune_budget=1000
 run a1 default
 run a1 cma gfo=cma
 run a1 seconds3 +task.env.horizon=3000
 run a1 episodes20 task.episodes=20
-run a1 retune finish.retune_budget=1000
+run a1 finish_retune finish.retune_budget=1000
