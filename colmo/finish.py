@@ -189,7 +189,8 @@ def _retune(
     until: float, heldout_took: float,
 ) -> dict:
     """The final policy (the simplified one where simplification made it, else the best program)
-    with its constants re-tuned by `gfo.method` at `finish.retune_budget` evaluations, stopped
+    with its constants re-tuned by `gfo.method` at `finish.retune_budget` evaluations, as many
+    candidates at a time as there are workers, stopped
     early enough before `until` for its held-out score (`heldout_took`: what the best program's
     took), written to `retuned_policy.py`; the summary's `retuned`."""
     simplified = "score" in best.simplified  # a failed simplification says only why
@@ -203,11 +204,11 @@ def _retune(
     if _left(until) < 3 * heldout_took:  # its own constants, the final ones and the held-out score
         log.warning("no time left to re-tune the %s policy (search.max_seconds)", source)
         return {}
-    gfo = replace(cfg.gfo, budget=cfg.finish.retune_budget)
-    chunks = max(1, executor.n_workers // gfo.workers)
+    # The finish has the workers to itself: a candidate for each (racing runs a candidate's episodes in one request).
+    gfo = replace(cfg.gfo, budget=cfg.finish.retune_budget, workers=max(executor.n_workers, 1))
     # What is being scored when the tuning stops still ends, and the referee's two scores follow.
     stop = lambda: _left(until) <= 3 * heldout_took  # noqa: E731
-    result = optimize_program(program, CandidateEvaluator(executor, evaluator, program.skeleton, chunks, label="re-tuning"), gfo, cfg.seed, stop)
+    result = optimize_program(program, CandidateEvaluator(executor, evaluator, program.skeleton, label="re-tuning"), gfo, cfg.seed, stop)
     if result.failure:
         log.warning("the %s policy not re-tuned: %s", source, result.failure)
         return {"from": source, "failure": result.failure}

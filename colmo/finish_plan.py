@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass
 
 from colmo.config import SearchConfig
+from colmo.optimize.methods import racing_on
 from colmo.robustness import grid_points
 from colmo.sandbox.referee import LOCKSTEP
 
@@ -27,6 +28,9 @@ RENDER_FIXED_S = 5.0
 VIDEO_S = 20.0  # seconds of frames for a full-size video at its full frame rate, at most
 VIDEO_MIN_S = 2.0  # seconds of frames for a small, short video
 SMALL = (320, 240)
+# Of a candidate's episodes, those a re-tuning with racing runs, at most: 21-48% in the quadruped's
+# and the A1's re-tunings at 1000 evaluations (docs/locomotion-search.md).
+RACED_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -140,7 +144,9 @@ def plan_finish(cfg: SearchConfig, referee: RefereeCost, workers: int, available
 
 def retune_cost(cfg: SearchConfig, referee: RefereeCost, workers: int) -> float:
     """What re-tuning the final policy costs: `finish.retune_budget` fast-path evaluations on the
-    training episodes, spread over the workers, then the referee's training and held-out scores."""
+    training episodes, one candidate per worker at a time (`colmo.finish`), with racing
+    `RACED_SHARE` of their episodes; then the referee's training and held-out scores."""
     workers = max(workers, 1)
-    candidates = SAFETY * cfg.finish.retune_budget * cfg.task.episodes * referee.episode / workers
+    episodes = max(cfg.gfo.racing_min_episodes, RACED_SHARE * cfg.task.episodes) if racing_on(cfg.gfo) else cfg.task.episodes
+    candidates = SAFETY * cfg.finish.retune_budget * episodes * referee.episode / workers
     return candidates + referee.seconds(cfg.task.episodes, workers) + referee.seconds(cfg.heldout.episodes, workers)

@@ -22,7 +22,7 @@ from types import SimpleNamespace
 import pytest
 from conftest import compose, limit_for_load, run_colmo
 
-from colmo.finish_plan import SAFETY, RefereeCost, plan_finish
+from colmo.finish_plan import RACED_SHARE, SAFETY, RefereeCost, plan_finish
 from colmo.render import PLOT_FILE, VIDEO_FILE
 from colmo.store import BEST_POLICY_FILE, SIMPLIFIED_POLICY_FILE, STORE_FILE, SUMMARY_FILE
 from colmo.timelimit import TimeBudget, duration, job_start, process_seconds
@@ -191,10 +191,14 @@ def test_the_finish_plans_the_re_tuning_in_full_where_it_fits_and_cuts_it_to_a_s
     cfg = compose("search", "task=pendulum", "finish.retune_budget=1000")
     full = plan_finish(cfg, referee, workers)
     assert plain.retune_seconds == 0 and not full.reduced
-    # 1000 candidates' training episodes over both workers, then the referee's training and held-out scores.
-    candidates = SAFETY * 1000 * cfg.task.episodes * referee.episode / workers
+    # 1000 candidates, one per worker at a time, racing through at most half their training episodes;
+    # then the referee's training and held-out scores.
+    assert cfg.gfo.method == "oneplusone" and RACED_SHARE == 0.5
+    candidates = SAFETY * 1000 * cfg.task.episodes / 2 * referee.episode / workers
     assert full.retune_seconds == pytest.approx(candidates + referee.seconds(cfg.task.episodes, workers) + referee.seconds(cfg.heldout.episodes, workers))
     assert full.seconds == pytest.approx(plain.seconds + full.retune_seconds) and "re-tuning" in full.describe(cfg)
+    unraced = plan_finish(compose("search", "task=pendulum", "finish.retune_budget=1000", "gfo.racing=false"), referee, workers)
+    assert unraced.retune_seconds - full.retune_seconds == pytest.approx(candidates)  # every candidate runs all its episodes
     available = plain.seconds + full.retune_seconds / 2  # everything else fits, the re-tuning does not
     cut = plan_finish(cfg, referee, workers, available)
     assert cut.reduced and cut.seconds <= available + 1e-9
