@@ -16,12 +16,11 @@
 #   a1/cma              GFO CMA-ES on the A1
 #   a1/seconds3         3-second episodes (3000 steps): one second pays a topple, three pay a gait
 #   a1/episodes20       20 training episodes instead of 10 (its winners lost 5-20 held-out)
-#   a1/finish_retune    the finish's re-tuning at 1000 evaluations (finish.retune_budget=1000)
 # Each run is a one-job sweep into its own directory, so running this again keeps what finished
 # and resumes the rest (a resumed run's time limit is the whole run's). RUN_SECONDS sets another
 # length (the goal is within an hour: RUN_SECONDS=3600 into another OUT).
 #
-#   [RUN_SECONDS=3600] scripts/locomotion_experiment.sh OUT [SEED [TASK/VARIANT ...]]   all thirteen variants unless named
+#   [RUN_SECONDS=3600] scripts/locomotion_experiment.sh OUT [SEED [TASK/VARIANT ...]]   all twelve variants unless named
 #   python scripts/mixed_summary.py OUT        the table (its comparison is with a `mutate` variant, if any)
 set -u
 out=$(mkdir -p "$1" && cd "$1" && pwd)
@@ -48,4 +47,3 @@ run a1 default
 run a1 cma gfo=cma
 run a1 seconds3 +task.env.horizon=3000
 run a1 episodes20 task.episodes=20
-run a1 finish_retune finish.retune_budget=1000
