@@ -1,5 +1,6 @@
-"""What produced a run's numbers: colmo's version and, when colmo runs from a git checkout, its
-commit and whether the checkout differed from it (installed, where pip took it from); Python,
+"""What produced a run's numbers: colmo's version, the folder its code was imported from and, when
+that is a git checkout, its commit and whether the checkout differed from it (installed, where pip
+took it from; neither where the code imported is not the installed one: a `PYTHONPATH` copy); Python,
 the platform and its cores; and the versions of the libraries a score depends on (the
 simulator, the optimizers, numpy, the model runtime). `summary.json` and `result.json` carry
 it as `provenance`, and the MLflow run as tags, so a number can be traced to the code and
@@ -51,21 +52,33 @@ def installed_from(direct_url: Optional[str]) -> tuple[Optional[str], Optional[s
     return record.get("url"), (record.get("vcs_info") or {}).get("commit_id")
 
 
+def is_installed_copy(package: Path, located: Path, url: Optional[str]) -> bool:
+    """Whether the code imported at `package` is the installed distribution's: its files are where
+    the distribution put them (`located`), or the distribution is an editable install of
+    `package`'s folder (its PEP 610 `url`)."""
+    return located.resolve() == package.resolve() or url == package.resolve().parent.as_uri()
+
+
 @functools.cache
 def provenance() -> dict[str, Any]:
     """This process's provenance (module docstring), taken once: `colmo.cli` asks as each job
     starts, so edits to the checkout while a run goes on do not change what it records. An
     installed colmo has the commit only where pip installed it from git."""
-    commit, uncommitted = source_state(Path(__file__).resolve().parent)
+    package = Path(__file__).resolve().parent
+    commit, uncommitted = source_state(package)
     url = None
     if commit is None:
         try:
-            url, commit = installed_from(importlib.metadata.distribution("colmo").read_text("direct_url.json"))
+            distribution = importlib.metadata.distribution("colmo")
+            url, commit = installed_from(distribution.read_text("direct_url.json"))
+            if not is_installed_copy(package, Path(str(distribution.locate_file("colmo"))), url):
+                url, commit = None, None  # what pip installed is not what runs
         except importlib.metadata.PackageNotFoundError:
             pass
         uncommitted = False if commit else None
     return {
         "colmo": _version("colmo"),
+        "source": str(package.parent),
         "commit": commit,
         "uncommitted_changes": uncommitted,
         "installed_from": url,

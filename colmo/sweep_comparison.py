@@ -152,7 +152,7 @@ def variant_lines(jobs: list[JobOutcome], variants: list[str]) -> list[str]:
 def _code(record: dict[str, Any]) -> str:
     if record.get("commit"):
         return record["commit"][:12] + (" with uncommitted changes" if record.get("uncommitted_changes") else "")
-    return f"colmo {record.get('colmo')}"
+    return f"colmo {record.get('colmo')}" + (f" from {record['source']}" if record.get("source") else "")
 
 
 def _facets(record: Optional[dict[str, Any]]) -> dict[str, str]:

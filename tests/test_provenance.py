@@ -6,10 +6,15 @@ test_optimize_cli.py and test_track.py check those)."""
 from __future__ import annotations
 
 import importlib.metadata
+import json
+import os
+import shutil
 import subprocess
+import sys
 from pathlib import Path
 
-from colmo.provenance import LIBRARIES, installed_from, mlflow_tags, provenance, source_state
+import colmo
+from colmo.provenance import LIBRARIES, installed_from, is_installed_copy, mlflow_tags, provenance, source_state
 
 
 def git(directory: Path, *args: str) -> str:
@@ -63,11 +68,32 @@ def test_an_installed_colmo_has_a_commit_only_where_pip_took_it_from_git():
     assert installed_from(None) == (None, None) and installed_from("not json") == (None, None)
 
 
+def test_installed_facts_describe_only_the_installed_code(tmp_path):
+    site = tmp_path / "site-packages" / "colmo"
+    assert is_installed_copy(site, site, None)  # pip install .
+    checkout = tmp_path / "checkout"
+    assert is_installed_copy(checkout / "colmo", site, checkout.as_uri())  # pip install -e checkout
+    assert not is_installed_copy(tmp_path / "copy" / "colmo", site, checkout.as_uri())  # PYTHONPATH=copy
+
+
+def test_a_copy_run_through_pythonpath_records_its_folder_and_not_the_installed_colmo(tmp_path):
+    copy = tmp_path / "frozen"
+    shutil.copytree(Path(colmo.__file__).parent, copy / "colmo", ignore=shutil.ignore_patterns("__pycache__"))
+    printed = subprocess.run(
+        [sys.executable, "-c", "import json; from colmo.provenance import provenance; print(json.dumps(provenance()))"],
+        env={**os.environ, "PYTHONPATH": str(copy)}, cwd=tmp_path, check=True, capture_output=True, text=True,
+    ).stdout
+    record = json.loads(printed)
+    assert record["source"] == str(copy.resolve())
+    assert record["commit"] is None and record["installed_from"] is None and record["uncommitted_changes"] is None
+
+
 def test_the_record_names_the_installed_libraries_and_the_tags_carry_them():
     record = provenance()
     installed = {name: importlib.metadata.version(name) for name in ("numpy", "mujoco", "nevergrad")}
     assert installed.items() <= record["libraries"].items()
     assert set(record["libraries"]) <= set(LIBRARIES) and record["cpus"] >= 1
+    assert record["source"] == str(Path(colmo.__file__).resolve().parent.parent)
     tags = mlflow_tags()
     assert tags["colmo.version"] == record["colmo"] == importlib.metadata.version("colmo")
     assert all(tags[f"colmo.lib.{name}"] == version for name, version in installed.items())

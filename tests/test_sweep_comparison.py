@@ -145,6 +145,9 @@ def test_jobs_run_on_different_code_or_libraries_are_named_with_what_differed():
     assert comparison_lines(Path("/runs/sweep"), installed)[-2:] == [
         "    code: aaaaaaaaaaaa (job 0), colmo 0.1.0 (job 1)", "    nevergrad: 1.0.12 (job 0), not installed (job 1)",
     ]
+    # Two copies of the code without a commit, each run through PYTHONPATH: told apart by their folders.
+    copies = [job(0, {**provenance(), "commit": None, "source": "/work/exp9"}), job(1, {**provenance(), "commit": None, "source": "/work/exp21"})]
+    assert comparison_lines(Path("/runs/sweep"), copies)[-1] == "    code: colmo 0.1.0 from /work/exp9 (job 0), colmo 0.1.0 from /work/exp21 (job 1)"
 
 
 def test_the_comparison_of_settings_goes_into_the_sweeps_parent_run(tmp_path):
