@@ -40,7 +40,7 @@ from colmo.finish_plan import RENDER_FIXED_S, VIDEO_MIN_S, FinishPlan, RefereeCo
 from colmo.heldout import alike, branch_counts, heldout_evaluator, heldout_score, robustness_of
 from colmo.intake import read_program
 from colmo.names import misnamed
-from colmo.optimize.tune import CandidateEvaluator, optimize_program
+from colmo.optimize.tune import optimize_alone
 from colmo.record import EVALUATED, SampleRecord, Summary, Totals, finite_or_none
 from colmo.robustness import save
 from colmo.shell import shell_override
@@ -201,14 +201,15 @@ def _retune(
     if not program.n_params:
         log.info("the %s policy has no constants to re-tune", source)
         return {}
-    if _left(until) < 3 * heldout_took:  # its own constants, the final ones and the held-out score
+    # Its own constants, the final ones and the held-out score; what is being scored when the
+    # tuning stops still ends, and the referee's two scores follow.
+    reserve = 3 * heldout_took
+    if _left(until) < reserve:
         log.warning("no time left to re-tune the %s policy (search.max_seconds)", source)
         return {}
     # The finish has the workers to itself: a candidate for each (racing runs a candidate's episodes in one request).
     gfo = replace(cfg.gfo, budget=cfg.finish.retune_budget, workers=max(executor.n_workers, 1))
-    # What is being scored when the tuning stops still ends, and the referee's two scores follow.
-    stop = lambda: _left(until) <= 3 * heldout_took  # noqa: E731
-    result = optimize_program(program, CandidateEvaluator(executor, evaluator, program.skeleton, label="re-tuning"), gfo, cfg.seed, stop)
+    result = optimize_alone(executor, evaluator, program, gfo, cfg.seed, stop=lambda: _left(until) <= reserve, label="re-tuning")
     if result.failure:
         log.warning("the %s policy not re-tuned: %s", source, result.failure)
         return {"from": source, "failure": result.failure}

@@ -21,7 +21,7 @@ import time
 from colmo.cli import hydra_app
 from colmo.config import OptimizeConfig
 from colmo.heldout import heldout_score
-from colmo.optimize.tune import CandidateEvaluator, optimize_program
+from colmo.optimize.tune import optimize_alone
 from colmo.policy_tools import check_policy_file, policy_session, print_result, write_result
 from colmo.record import finite_or_none
 from colmo.trackers import make_tracker
@@ -36,8 +36,7 @@ def main(cfg: OptimizeConfig) -> None:
     with policy_session(cfg) as session:
         executor, evaluator, program = session.executor, session.evaluator, session.program
         log.info("%s: %d parameters, gfo=%s budget=%d, %d episodes", cfg.policy_file, program.n_params, cfg.gfo.method, cfg.gfo.budget, len(evaluator.seeds))
-        chunks = max(1, executor.n_workers // cfg.gfo.workers)
-        result = optimize_program(program, CandidateEvaluator(executor, evaluator, program.skeleton, chunks), cfg.gfo, cfg.seed)
+        result = optimize_alone(executor, evaluator, program, cfg.gfo, cfg.seed)
         heldout = None
         if not result.failure:
             heldout = heldout_score(executor, session.heldout(cfg.heldout.episodes), program.skeleton, result.params)

@@ -215,6 +215,17 @@ def optimize_program(
     )
 
 
+def optimize_alone(
+    executor: Executor, evaluator: Evaluator, program: ParametricProgram, cfg: "GFOConfig", seed: int,
+    stop: Callable[[], bool] = lambda: False, label: str = "",
+) -> ProgramResult:
+    """`optimize_program` for a program that has the executor to itself (`colmo-optimize`, the
+    simplifier's and the finish's re-tuning): `cfg.workers` candidates at a time, each one's
+    episodes split over the workers they leave."""
+    chunks = max(1, executor.n_workers // cfg.workers)
+    return optimize_program(program, CandidateEvaluator(executor, evaluator, program.skeleton, chunks, label=label), cfg, seed, stop)
+
+
 def judged(referee: Evaluation, fast: Evaluation, again: Callable[[], Evaluation]) -> Evaluation:
     """The referee's evaluation, failed if the program's own (fast-path) run reported other
     returns: as nondeterministic if the referee, asked `again`, cannot repeat its own returns

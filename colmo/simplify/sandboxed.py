@@ -9,7 +9,7 @@ It plugs two things into the greedy algorithm (`colmo.simplify.greedy`):
     actions, on the training episodes or on the held-out ones. A batch is one
     `executor.evaluate` call; when it has fewer programs than there are workers, each program's
     episodes are split over several requests, so every worker is busy;
-  * re-tuning: `colmo.optimize.tune.optimize_program` with the run's GFO settings on the
+  * re-tuning: `colmo.optimize.tune.optimize_alone` with the run's GFO settings on the
     training episodes, whose result is the readable (4-digit) code; `gfo.method=none` skips it.
 
 A round's candidates go to the executor `BATCH_PER_WORKER` per worker at a time, largest
@@ -30,7 +30,7 @@ from colmo.errors import RunError
 from colmo.evaluation import REFEREE, Evaluation, Evaluator, Executor
 from colmo.intake import Unusable, read_program
 from colmo.optimize.methods import tunes_constants
-from colmo.optimize.tune import CandidateEvaluator, optimize_program
+from colmo.optimize.tune import optimize_alone
 from colmo.program import ParametricProgram
 from colmo.sandbox.check import ForbiddenProgram
 from colmo.simplify.greedy import ProgramFails, Retune, Scoring, SimplifyResult, simplify
@@ -78,13 +78,12 @@ class RefereeScores:
 
 def gfo_retune(executor: Executor, evaluator: Evaluator, gfo_cfg: "GFOConfig", seed: int, stop: Callable[[], bool] = lambda: False) -> Retune:
     """A `Retune`: the code with its constants tuned by `gfo_cfg`'s method on `evaluator`'s
-    episodes and rounded to 4 digits (`optimize_program`); the code itself if that failed or
+    episodes and rounded to 4 digits (`optimize_alone`); the code itself if that failed or
     changed nothing."""
 
     def retune(code: str) -> str:
         program = read_program(code, evaluator.allowed_imports)
-        chunks = max(1, executor.n_workers // gfo_cfg.workers)
-        result = optimize_program(program, CandidateEvaluator(executor, evaluator, program.skeleton, chunks), gfo_cfg, seed, stop)
+        result = optimize_alone(executor, evaluator, program, gfo_cfg, seed, stop)
         return code if result.failure or result.params == tuple(program.values) else result.code
 
     return retune
