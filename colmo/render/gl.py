@@ -56,7 +56,12 @@ def probe(backend: str) -> Optional[str]:
 
 
 def _selection() -> tuple[Optional[str], str]:
-    return _selection_for(os.environ.get("MUJOCO_GL", "").strip().lower())
+    backend, reason = _selection_for(os.environ.get("MUJOCO_GL", "").strip().lower())
+    if backend:
+        # The backend stays this process's though something unset MUJOCO_GL since it was chosen:
+        # say so again, for the subprocesses started from here.
+        os.environ["MUJOCO_GL"] = backend
+    return backend, reason
 
 
 @functools.cache
