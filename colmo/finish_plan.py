@@ -120,15 +120,15 @@ def plan_finish(cfg: SearchConfig, referee: RefereeCost, workers: int, available
     # longer simplification share what remains.
     measurements = 3 if cfg.finish.simplify else 0
     training = heldout_cost(1, cfg.task.episodes)
+    least = (1 + measurements) * heldout_cost(1, min(workers, episodes)) + measurements * training
+    # The render gets what it cannot do without (the episode, the plot, a few frames), and an
+    # equal share up to its full video: what the full video would not use is the other steps'.
     least_render = episode + RENDER_FIXED_S + VIDEO_MIN_S if cfg.finish.render else 0.0
-    least = least_render + (1 + measurements) * heldout_cost(1, min(workers, episodes)) + measurements * training
-    # The re-tuning stops where its slot ends with the best constants so far: an equal share at
-    # most, and only what the other steps can spare of what they cannot do without.
-    retune = min(retune, available / steps, max(available - robustness - least, 0.0))
-    available -= robustness + retune
-    # The render first gets what it cannot do without (the episode, the plot, a few frames).
-    render = max(least_render, available / (1 + cfg.finish.simplify + cfg.finish.render)) if cfg.finish.render else 0.0
-    left = max(available - render, 0.0)
+    render = max(least_render, min(render, available / steps))
+    # The re-tuning stops where its slot ends with the best constants so far: an equal share of
+    # what the render leaves at most, and only what the other steps can spare of what they cannot do without.
+    retune = min(retune, (available - render) / (steps - cfg.finish.render), max(available - robustness - render - least, 0.0))
+    left = max(available - robustness - retune - render, 0.0)
     budget = max(left - measurements * training, 0.0) / (1 + measurements)  # for one held-out score
     held_out = next((n for n in range(episodes, workers, -workers) if heldout_cost(1, n) <= budget), min(workers, episodes))
     one = heldout_cost(1, held_out)  # a program's held-out score

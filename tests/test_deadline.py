@@ -202,7 +202,23 @@ def test_the_finish_plans_the_re_tuning_in_full_where_it_fits_and_cuts_it_to_a_s
     available = plain.seconds + full.retune_seconds / 2  # everything else fits, the re-tuning does not
     cut = plan_finish(cfg, referee, workers, available)
     assert cut.reduced and cut.seconds <= available + 1e-9
-    assert 0 < cut.retune_seconds <= available / 4  # an equal share with the held-out scores, the simplification and the video
+    # An equal share, with the held-out scores and the simplification, of what the video leaves.
+    assert 0 < cut.retune_seconds <= (available - cut.render_seconds) / 3 + 1e-9
+
+
+def test_a_finish_cut_to_fit_gives_the_video_no_more_than_its_full_length_and_the_other_steps_the_rest():
+    # Quadruped-like costs: the full finish (held-out scores, simplification, re-tuning) does not
+    # fit, but an equal share of the time is far more than the full video needs.
+    referee, workers = RefereeCost(episode=0.5, batch=2.0), 2
+    cfg = compose("search", "task=quadruped", "search.max_seconds=1800", "finish.retune_budget=1000")
+    full = plan_finish(cfg, referee, workers)
+    available = 0.6 * full.seconds
+    assert full.render_seconds < available / 4
+    cut = plan_finish(cfg, referee, workers, available)
+    assert cut.reduced and cut.render_seconds == pytest.approx(full.render_seconds)
+    assert (cut.size, cut.video_seconds) == (full.size, full.video_seconds)  # the full video
+    assert cut.seconds == pytest.approx(available)  # no step's slot is more than it can use
+    assert cut.retune_seconds == pytest.approx((available - cut.render_seconds) / 3)
 
 
 def test_a_long_run_keeps_a_share_of_its_time_for_the_simplification():
