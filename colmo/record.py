@@ -155,6 +155,9 @@ class Totals:
     evaluator_busy: float
     seconds: float
     worker_seconds: float  # the evaluation workers' busy seconds, summed over workers: the compute evaluations took
+    # Control steps simulated per busy worker-second: how fast this machine, at its load, ran the
+    # task's episodes (and the programs in them); two runs of a task tell a slower machine by it.
+    steps_per_worker_second: float
     # The machine's mean load average over the run, its own processes included
     # (`colmo.load.LoadMeter`): what a timed result was measured under; 0 where unknown.
     load: float
@@ -313,7 +316,8 @@ class Counters:
             tokens_per_second=_ratio(self.completion_tokens, self.generation_seconds),
             evaluations_per_second=_ratio(self.evaluations, elapsed.seconds), generator_busy=_ratio(elapsed.generator_seconds, elapsed.seconds),
             evaluator_busy=_ratio(elapsed.evaluator_seconds, elapsed.seconds * workers), seconds=elapsed.seconds,
-            worker_seconds=elapsed.evaluator_seconds, load=_ratio(elapsed.load_seconds, elapsed.seconds),
+            worker_seconds=elapsed.evaluator_seconds, steps_per_worker_second=_ratio(self.steps, elapsed.evaluator_seconds),
+            load=_ratio(elapsed.load_seconds, elapsed.seconds),
         )
 
 

@@ -23,7 +23,9 @@ Where the sweep compares settings, not only seeds, each setting's scores follow,
 difference to the first setting with a bootstrap interval (`colmo.comparison`): "no
 significant difference" where the interval holds 0. Where the jobs with a result ran on
 different code or libraries (their `summary.json`'s `provenance` differs: a sweep resumed after
-an upgrade), lines name what differed and which jobs ran which.
+an upgrade), lines name what differed and which jobs ran which; where a task's time-limited
+jobs simulated at speeds far apart (`steps_per_worker_second`: jobs side by side on a loaded
+machine, or on machines of different speeds), a line gives each job's.
 The report line appears when the jobs were tracked in MLflow (`colmo.track`), naming the sweep
 by its id (`sweep_id`).
 """
@@ -43,6 +45,10 @@ from colmo.comparison import difference, mean_std
 from colmo.errors import EXIT_RUNTIME, one_line
 from colmo.record import summary_failure
 from colmo.store import read_summary
+
+
+# Of a task's time-limited jobs, the fastest simulation over the slowest that the comparison points out.
+SPEED_SPREAD = 1.5
 
 
 @dataclass(frozen=True)
@@ -101,6 +107,7 @@ def comparison_lines(sweep_dir: Path, jobs: list[JobOutcome], shown_dir: Optiona
         lines.append(f"  {job.number:>3}  {variant:<{width}}  {best:>8}  {heldout:>8}  {samples:>7}  {seconds:>7.1f}  {searched:>8.1f}")
     lines += variant_lines(jobs, variants)
     lines += provenance_lines(jobs)
+    lines += speed_lines(jobs)
     tracked = [job for job in jobs if job.tracking is not None]
     if tracked:
         from colmo.track.sweep import sweep_id  # MLflow only for a tracked sweep
@@ -182,6 +189,23 @@ def provenance_lines(jobs: list[JobOutcome]) -> list[str]:
     for facet, values in differing.items():
         shown = ", ".join(f"{value} (job{'s' * (len(numbers) > 1)} {', '.join(map(str, numbers))})" for value, numbers in values.items())
         lines.append(f"    {facet}: {shown}")
+    return lines
+
+
+def speed_lines(jobs: list[JobOutcome]) -> list[str]:
+    """Where a task's time-limited jobs simulated at speeds `SPEED_SPREAD` apart or more (control
+    steps per busy worker-second: the machine's speed and load, and the programs' cost), each job's:
+    a time limit bought them different numbers of samples."""
+    by_task: dict[str, list[tuple[int, float]]] = {}
+    for job in jobs:
+        speed = job.summary.get("steps_per_worker_second") if job.failure is None else None
+        if speed and job.summary.get("stop_reason") == "max_seconds":
+            by_task.setdefault(job.task, []).append((job.number, speed))
+    lines = []
+    for task, speeds in by_task.items():
+        if max(speed for _, speed in speeds) >= SPEED_SPREAD * min(speed for _, speed in speeds):
+            shown = ", ".join(f"{speed / 1000:.1f}k (job {number})" for number, speed in speeds)
+            lines.append(f"  {task}: the time-limited jobs simulated at different speeds, control steps per worker-second: {shown}")
     return lines
 
 

@@ -150,6 +150,21 @@ def test_jobs_run_on_different_code_or_libraries_are_named_with_what_differed():
     assert comparison_lines(Path("/runs/sweep"), copies)[-1] == "    code: colmo 0.1.0 from /work/exp9 (job 0), colmo 0.1.0 from /work/exp21 (job 1)"
 
 
+def test_time_limited_jobs_of_a_task_that_simulated_at_speeds_far_apart_are_named_with_each_speed():
+    def job(number: int, task: str, speed: float, stop_reason: str = "max_seconds") -> JobOutcome:
+        return JobOutcome(number, (f"task={task}", f"seed={number}"), summary(steps_per_worker_second=speed, stop_reason=stop_reason), None, task)
+
+    close = [job(0, "quadruped", 9500.0), job(1, "quadruped", 7000.0), job(2, "cheetah", 3000.0)]  # tasks apart, not jobs of a task
+    assert not any("different speeds" in line for line in comparison_lines(Path("/runs/sweep"), close))
+    counted = [job(0, "quadruped", 9500.0, "max_samples"), job(1, "quadruped", 4600.0, "max_samples")]  # a time limit bought them nothing
+    assert not any("different speeds" in line for line in comparison_lines(Path("/runs/sweep"), counted))
+    apart = [*close, job(3, "quadruped", 4600.0), JobOutcome(4, ("task=quadruped", "seed=4"), summary(programs_evaluated=0), None, "quadruped")]
+    assert comparison_lines(Path("/runs/sweep"), apart)[-1] == (
+        "  quadruped: the time-limited jobs simulated at different speeds, control steps per worker-second: "
+        "9.5k (job 0), 7.0k (job 1), 4.6k (job 3)"
+    )
+
+
 def test_the_comparison_of_settings_goes_into_the_sweeps_parent_run(tmp_path):
     from colmo.track import open_experiment
     from colmo.track.sweep import record_comparison, sweep_id

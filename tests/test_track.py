@@ -337,7 +337,7 @@ def _report(batch: int, score: float) -> BatchReport:
     counts = dict(programs_evaluated=batch + 1, duplicates_skipped=0, failures=0, unusable_outputs=0, interrupted=0,
                   evaluations=3 * (batch + 1), steps=100 * (batch + 1))
     rates = dict(valid_program_rate=1.0, duplicate_rate=0.0, tokens_per_second=0.0, evaluations_per_second=5.0,
-                 generator_busy=0.1, evaluator_busy=0.9, seconds=float(batch + 1), worker_seconds=1.8 * (batch + 1), load=2.0, generation_seconds=0.1, evaluation_seconds=0.2)
+                 generator_busy=0.1, evaluator_busy=0.9, seconds=float(batch + 1), worker_seconds=1.8 * (batch + 1), steps_per_worker_second=55.6, load=2.0, generation_seconds=0.1, evaluation_seconds=0.2)
     return BatchReport(batch=batch, samples=batch + 1, best_score=score, best_per_island=(score, 1.0), queue_depth=0, **counts, **rates)
 
 
