@@ -46,7 +46,6 @@ from colmo.errors import EXIT_RUNTIME, one_line
 from colmo.record import summary_failure
 from colmo.store import read_summary
 
-
 # Of a task's time-limited jobs, the fastest simulation over the slowest that the comparison points out.
 SPEED_SPREAD = 1.5
 

@@ -67,8 +67,8 @@ VIEW_KEY = "colmo"
 VIEW_TAG = f"mlflow.sharedViewState.{VIEW_KEY}"
 VIEW_PARAMS = ("seed", "llm.name")
 VIEW_METRICS = (
-    PRIMARY_METRIC, "best_heldout_score", "samples", "seconds", "worker_seconds", "load", "steps_per_worker_second", "runs", "programs_evaluated", "valid_program_rate",
-    "evaluations", "steps",
+    PRIMARY_METRIC, "best_heldout_score", "samples", "seconds", "worker_seconds", "load", "steps_per_worker_second", "runs", "programs_evaluated",
+    "valid_program_rate", "evaluations", "steps",
 )
 VIEW_GROUP = "gfo.method"
 
