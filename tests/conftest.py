@@ -211,7 +211,7 @@ def stream_chunks(answer: dict, chat: bool, include_usage: bool) -> list[dict]:
     return chunks
 
 
-def wait_for(condition, timeout: float = 120.0, interval: float = 0.01, what: str = "a condition"):
+def wait_for(condition, timeout: float = 300.0, interval: float = 0.01, what: str = "a condition"):
     """Poll `condition()` until it returns something true; fail after `timeout` seconds (generous:
     CI shares 2 cores)."""
     deadline = time.monotonic() + timeout

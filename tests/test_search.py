@@ -102,7 +102,7 @@ def start_search(tmp_path, *overrides):
     return start_colmo("colmo", *TINY, *overrides, "hydra.run.dir=run", cwd=tmp_path, start_new_session=True)
 
 
-def wait_for_samples(run_dir, at_least: int, timeout: float = 120) -> None:
+def wait_for_samples(run_dir, at_least: int, timeout: float = 300) -> None:
     deadline = time.time() + timeout
     while time.time() < deadline:
         try:
