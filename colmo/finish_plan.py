@@ -124,7 +124,8 @@ def plan_finish(cfg: SearchConfig, referee: RefereeCost, workers: int, available
     # The render gets what it cannot do without (the episode, the plot, a few frames), and an
     # equal share up to its full video: what the full video would not use is the other steps'.
     least_render = episode + RENDER_FIXED_S + VIDEO_MIN_S if cfg.finish.render else 0.0
-    render = max(least_render, min(render, available / steps))
+    whole_video = render <= available / steps
+    render = render if whole_video else max(least_render, available / steps)
     # The re-tuning stops where its slot ends with the best constants so far: an equal share of
     # what the render leaves at most, and only what the other steps can spare of what they cannot do without.
     retune = min(retune, (available - render) / (steps - cfg.finish.render), max(available - robustness - render - least, 0.0))
@@ -134,10 +135,11 @@ def plan_finish(cfg: SearchConfig, referee: RefereeCost, workers: int, available
     one = heldout_cost(1, held_out)  # a program's held-out score
     spare = left - one - measurements * (one + training)
     kept = min(top, 1 + max(int(spare / (1 + cfg.finish.simplify) // one), 0))
-    video = max(render - episode - RENDER_FIXED_S, VIDEO_MIN_S)
+    # (The whole video's size is decided, not read back from its seconds: they lose the last bit.)
+    video = VIDEO_S if whole_video else max(render - episode - RENDER_FIXED_S, VIDEO_MIN_S)
     return FinishPlan(
         kept, held_out, kept * one,
-        max(left - kept * one, 0.0) if cfg.finish.simplify else 0.0, render, video, (640, 480) if video >= VIDEO_S else SMALL, True, robustness,
+        max(left - kept * one, 0.0) if cfg.finish.simplify else 0.0, render, video, (640, 480) if whole_video else SMALL, True, robustness,
         retune,
     )
 
