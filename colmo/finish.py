@@ -4,13 +4,13 @@ simplified best policy, and a video and plot of it in action.
 A search selects programs by their training score, which therefore flatters the winner; the
 top `finish.top` structures get a held-out score from the referee on `heldout.episodes`
 fresh episodes (`colmo.heldout`). The best one's branches are counted over the training and
-held-out episodes (`colmo.coverage`: the comments of best_policy.py); it is then simplified (`colmo.simplify`),
-with `finish.retune_budget` the result's constants re-tuned at that budget (retuned_policy.py, with
-its held-out score beside the one it started from: the search tunes each program at `gfo.budget`,
-far fewer evaluations than a final policy of many constants may need), and the best program
-rendered (`colmo.render`) on its first held-out episode, into the run directory; with
-`finish.robustness`, before that, scored over a grid of model-mismatch magnitudes
-(`colmo.robustness`: robustness.json/.csv/.png, a few numbers in the summary). Each step is
+held-out episodes (`colmo.coverage`: the comments of best_policy.py); it is rendered
+(`colmo.render`) on its first held-out episode, into the run directory; with `finish.robustness`
+scored over a grid of model-mismatch magnitudes (`colmo.robustness`: robustness.json/.csv/.png, a
+few numbers in the summary); then simplified (`colmo.simplify`), and with `finish.retune_budget`
+the result's constants re-tuned at that budget (retuned_policy.py, with its held-out score beside
+the one it started from: the search tunes each program at `gfo.budget`, far fewer evaluations
+than a final policy of many constants may need). Each step is
 optional, and none can fail the search: a missing OpenGL or a simplification that finds
 nothing to remove is a line in the log and in the summary.
 
@@ -101,8 +101,8 @@ def finish(
     cfg: SearchConfig, store: ProgramStore, executor: Executor, evaluator: Evaluator, run_dir: Path,
     until: float = math.inf, referee: RefereeCost = _UNMEASURED, observation_names: Sequence[str] = (), observation_bounds: Bounds = (),
 ) -> BestPrograms:
-    """Held-out scores of the top programs (stored with them), then the best one simplified and
-    rendered, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`;
+    """Held-out scores of the top programs (stored with them), then the best one rendered and
+    simplified, all by `until` (`time.monotonic()` seconds), each step in its slot of `plan_finish`;
     the best one's variables named against the spec's `observation_names` (`colmo.names`), its
     comparisons that the code decides within the spec's `observation_bounds` listed (`colmo.bounds`)."""
     best = BestPrograms()
@@ -144,17 +144,27 @@ def finish(
         step = time.monotonic()
         best.coverage = _coverage(executor, evaluator, heldout, top[0], referee, until - plan.render_seconds)
         took["coverage"] = time.monotonic() - step
+    if cfg.finish.render:
+        # The video shows the best program as found, so it comes before the steps that change it:
+        # what its slot does not use (its frames cost less than planned on most tasks) is theirs.
+        # The slot counts from the warm-up's end: in a short run the held-out scores are too short to hide it.
+        step = time.monotonic()
+        warming.join(max(min(plan.render_seconds, _left(until)), 0.0))
+        later = plan.robustness_seconds + plan.simplify_seconds + plan.retune_seconds
+        slot_end = min(until, max(time.monotonic() + plan.render_seconds, until - later))
+        best.media = _render(cfg, executor, heldout, top[0], run_dir, until, plan, slot_end)
+        took["video and plot"] = time.monotonic() - step
     if cfg.finish.robustness:
         # Its time comes out of the simplification's slot, which takes what is left.
-        if not best.heldout or not plan.robustness_seconds or _left(until) - plan.render_seconds < plan.robustness_seconds:
+        if not best.heldout or not plan.robustness_seconds or _left(until) < plan.robustness_seconds:
             log.warning("no time left for the robustness report of the best policy (search.max_seconds)")
         else:
             step = time.monotonic()
             # More episodes for a stated precision only from the slack: the simplification keeps its planned slot.
-            best.robustness = _robustness(cfg, executor, evaluator, top[0], run_dir, until - plan.render_seconds - plan.simplify_seconds - plan.retune_seconds)
+            best.robustness = _robustness(cfg, executor, evaluator, top[0], run_dir, until - plan.simplify_seconds - plan.retune_seconds)
             took["robustness"] = time.monotonic() - step
     if cfg.finish.simplify:
-        simplify_until = until - plan.render_seconds - plan.retune_seconds
+        simplify_until = until - plan.retune_seconds
         # Simplifying first measures the best program on the training and the held-out episodes.
         if not best.heldout or simplify_until - time.monotonic() < 2 * best_took:
             log.warning("no time left to simplify the best policy (search.max_seconds)")
@@ -168,15 +178,10 @@ def finish(
             took["simplification"] = time.monotonic() - step
     if cfg.finish.retune_budget and best.heldout:
         step = time.monotonic()
-        best.retuned = _retune(cfg, executor, evaluator, heldout, top[0], best, run_dir, until - plan.render_seconds, best_took)
+        best.retuned = _retune(cfg, executor, evaluator, heldout, top[0], best, run_dir, until, best_took)
         took["re-tuning"] = time.monotonic() - step
     best.readability = readability.report(top[0].code, best.coverage, best.simplified, best.misnamed, best.decided)
     log.info("best policy's readability: %s", readability.describe(best.readability))
-    if cfg.finish.render:
-        step = time.monotonic()
-        warming.join(max(_left(until), 0.0))
-        best.media = _render(cfg, executor, heldout, top[0], run_dir, until, plan)
-        took["video and plot"] = time.monotonic() - step
     log.info(
         "finish took %.0f s of the %.0f s planned: %s", time.monotonic() - started, plan.seconds,
         ", ".join(f"{name} {seconds:.0f} s" for name, seconds in took.items()),
@@ -235,8 +240,7 @@ def _retune(
 
 
 def _warm_up_render() -> threading.Thread:
-    """`colmo.render.warm_up` in a thread, done while the held-out scores and the simplification
-    wait on the workers (a thread: the imports and the GL probe are this process's)."""
+    """`colmo.render.warm_up` in a thread, done while the held-out scores wait on the workers (a thread: the imports and the GL probe are this process's)."""
     from colmo.render import warm_up
 
     thread = threading.Thread(target=warm_up, name="colmo-render-warm-up", daemon=True)
@@ -297,17 +301,19 @@ def _shown(score: Optional[float]) -> str:
     return "failed" if score is None else f"{score:.2f}"
 
 
-def _render(cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float, plan: FinishPlan) -> dict:
-    """The video and plot of the best policy, its frames in the time left; the summary's `media`."""
-    left = _left(until)
+def _render(
+    cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float, plan: FinishPlan, slot_end: float,
+) -> dict:
+    """The video and plot of the best policy, if the run's time left (to `until`) allows the
+    smallest, its frames in the time to `slot_end`; the summary's `media`."""
     trace_seconds = plan.render_seconds - plan.video_seconds - RENDER_FIXED_S  # the episode the referee records
-    if left < RENDER_FIXED_S + trace_seconds + VIDEO_MIN_S:
+    if _left(until) < RENDER_FIXED_S + trace_seconds + VIDEO_MIN_S:
         log.warning("no time left for the video and plot of the best policy (search.max_seconds)")
         return {}
     from colmo.render import render_policy  # matplotlib and the renderer: only when asked for
 
     width, height = plan.size
-    video_seconds = None if math.isinf(until) else max(min(plan.video_seconds, left - RENDER_FIXED_S - trace_seconds), VIDEO_MIN_S)
+    video_seconds = None if math.isinf(until) else max(min(plan.video_seconds, _left(slot_end) - RENDER_FIXED_S - trace_seconds), VIDEO_MIN_S)
     title = f"{cfg.task.name}: best policy (sample {record.sample}, training score {record.score:.1f})"
     media = render_policy(executor, heldout, record.skeleton, record.params, run_dir, title, width=width, height=height, video_seconds=video_seconds)
     found = {name: str(path.relative_to(run_dir)) for name, path in (("plot", media.plot), ("video", media.video)) if path}

@@ -82,6 +82,9 @@ def test_a_short_run_stops_searching_in_time_for_everything_it_promises(tmp_path
         assert (run.run_dir / name).is_file(), (name, run.stderr[-3000:])
     assert run.summary["best_heldout_score"] is not None
     assert run.summary["media"]["video"] == VIDEO_FILE
+    # The video shows the best program as found, so it is made before the simplification, which
+    # then has what the video's slot did not use.
+    assert (run.run_dir / VIDEO_FILE).stat().st_mtime <= (run.run_dir / SIMPLIFIED_POLICY_FILE).stat().st_mtime
     # A simplification the deadline stopped says so, with the command that goes on from the best policy.
     header = (run.run_dir / SIMPLIFIED_POLICY_FILE).read_text().split("\nimport", 1)[0]
     go_on = f"to go on: colmo-simplify task=pendulum seed=0 policy_file={run.run_dir / BEST_POLICY_FILE}"
