@@ -150,9 +150,7 @@ def finish(
         # The slot counts from the warm-up's end: in a short run the held-out scores are too short to hide it.
         step = time.monotonic()
         warming.join(max(min(plan.render_seconds, _left(until)), 0.0))
-        later = plan.robustness_seconds + plan.simplify_seconds + plan.retune_seconds
-        slot_end = min(until, max(time.monotonic() + plan.render_seconds, until - later))
-        best.media = _render(cfg, executor, heldout, top[0], run_dir, until, plan, slot_end)
+        best.media = _render(cfg, executor, heldout, top[0], run_dir, until, plan)
         took["video and plot"] = time.monotonic() - step
     if cfg.finish.robustness:
         # Its time comes out of the simplification's slot, which takes what is left.
@@ -240,7 +238,8 @@ def _retune(
 
 
 def _warm_up_render() -> threading.Thread:
-    """`colmo.render.warm_up` in a thread, done while the held-out scores wait on the workers (a thread: the imports and the GL probe are this process's)."""
+    """`colmo.render.warm_up` in a thread, done while the held-out scores wait on the workers (a
+    thread: the imports and the GL probe are this process's)."""
     from colmo.render import warm_up
 
     thread = threading.Thread(target=warm_up, name="colmo-render-warm-up", daemon=True)
@@ -301,11 +300,12 @@ def _shown(score: Optional[float]) -> str:
     return "failed" if score is None else f"{score:.2f}"
 
 
-def _render(
-    cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float, plan: FinishPlan, slot_end: float,
-) -> dict:
+def _render(cfg: SearchConfig, executor: Executor, heldout: Evaluator, record: SampleRecord, run_dir: Path, until: float, plan: FinishPlan) -> dict:
     """The video and plot of the best policy, if the run's time left (to `until`) allows the
-    smallest, its frames in the time to `slot_end`; the summary's `media`."""
+    smallest, its frames in its slot: `plan.render_seconds` from now, or up to the slots of the
+    steps after it, if that is later; the summary's `media`."""
+    later = plan.robustness_seconds + plan.simplify_seconds + plan.retune_seconds
+    slot_end = min(until, max(time.monotonic() + plan.render_seconds, until - later))
     trace_seconds = plan.render_seconds - plan.video_seconds - RENDER_FIXED_S  # the episode the referee records
     if _left(until) < RENDER_FIXED_S + trace_seconds + VIDEO_MIN_S:
         log.warning("no time left for the video and plot of the best policy (search.max_seconds)")
